@@ -1,0 +1,80 @@
+#pragma once
+// Analog acquisition: inner products of the image with each shifted
+// generator, r[n] = <f, phi(. - x_n)>, from point samples of a supersampled
+// image, or (conventional methods) the normalised weighted average
+// p[n] = sum_i w_i f_i / sum_i w_i with w_i = FILTER(x_i - x_n).
+//
+// Input sample (i, j) of a W_in x H_in image covering image_width x
+// image_height output pixels sits at ((i + 1/2) dx, (j + 1/2) dy) with
+// dx = image_width / W_in: any real ratio per axis. The quadrature is the
+// plain sum, r[n] = dx dy sum_i f_i phi(x_i - x_n), over every sample of the
+// boundary-extended image in the support. Rows stream through: each row is
+// read once and added to every coefficient whose support holds it.
+#include <vector>
+
+#include "sis/image.h"
+#include "sis/weights.h"
+
+namespace sis {
+
+enum class Method { MinError, Conventional };
+
+// Everything that depends only on sizes and options.
+class AcquisitionPlan {
+ public:
+  AcquisitionPlan(long input_width, long input_height, int channels, double image_width,
+                  double image_height, const Lattice& lattice, const Kernel& generator,
+                  Boundary boundary, Method method);
+
+  long input_width() const { return wx_.sources; }
+  long input_height() const { return wy_.sources; }
+  int channels() const { return channels_; }
+  long coefficients_x() const { return wx_.targets; }
+  long coefficients_y() const { return wy_.targets; }
+  const AxisWeights& weights_x() const { return wx_; }
+  const AxisWeights& weights_y() const { return wy_; }
+  const Lattice& lattice() const { return lattice_; }
+  const Kernel& generator() const { return generator_; }
+  Boundary boundary() const { return boundary_; }
+  Method method() const { return method_; }
+  double image_width() const { return image_w_; }
+  double image_height() const { return image_h_; }
+
+ private:
+  int channels_;
+  double image_w_, image_h_;
+  Lattice lattice_;
+  Kernel generator_;
+  Boundary boundary_;
+  Method method_;
+  AxisWeights wx_, wy_;  // targets: coefficient columns / rows; sources: input columns / rows
+};
+
+// Streams rows through a plan. Rows must arrive in order, each once.
+// The result does not depend on the strip sizes or the thread count.
+class Acquisition {
+ public:
+  explicit Acquisition(const AcquisitionPlan& plan, int threads = 1);
+  // Rows [y0, y1) of the input, interleaved, W_in * channels per row.
+  void add_rows(long y0, long y1, const float* rows);
+  void add_rows(long y0, long y1, const double* rows);
+  long next_row() const { return next_row_; }
+  // The acquired coefficients r[n] (min-error) or pixels p[n] (conventional).
+  Coefficients finish();
+
+ private:
+  const AcquisitionPlan& plan_;
+  int threads_;
+  long next_row_ = 0;
+  Grid<double> acc_;
+  std::vector<long> cursor_;     // per coefficient row: next entry of weights_y
+  std::vector<double> strip_;    // horizontally filtered rows of the current strip
+  template <typename T>
+  void add(long y0, long y1, const T* rows);
+};
+
+// Convenience: acquires a whole in-memory image.
+Coefficients acquire(const Image& input, const AcquisitionPlan& plan, int threads = 1);
+Coefficients acquire(const Grid<double>& input, const AcquisitionPlan& plan, int threads = 1);
+
+}  // namespace sis

@@ -1,0 +1,44 @@
+#pragma once
+// In-memory images and coefficient grids. Pixels are interleaved
+// (channel fastest), rows top to bottom, as in the image file.
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "sis/boundary.h"
+#include "sis/generator.h"
+#include "sis/lattice.h"
+
+namespace sis {
+
+template <typename T>
+struct Grid {
+  long width = 0, height = 0;
+  int channels = 0;
+  std::vector<T> data;
+
+  Grid() = default;
+  Grid(long w, long h, int c) : width(w), height(h), channels(c), data(std::size_t(w) * h * c) {}
+  T* row(long y) { return data.data() + std::size_t(y) * width * channels; }
+  const T* row(long y) const { return data.data() + std::size_t(y) * width * channels; }
+  T& at(long x, long y, int c) { return data[(std::size_t(y) * width + x) * channels + c]; }
+  T at(long x, long y, int c) const { return data[(std::size_t(y) * width + x) * channels + c]; }
+  std::size_t row_size() const { return std::size_t(width) * channels; }
+};
+
+using Image = Grid<float>;
+
+// Coefficients of an approximation f_app(x) = sum_n c[n] phi((x - x_n)/h)
+// on a lattice covering an image of image_width x image_height output pixels.
+// For the conventional methods c[n] are the filtered pixel values p[n] and
+// phi is the filter.
+struct Coefficients {
+  Grid<double> c;
+  Lattice lattice = Lattice::cartesian();
+  Kernel generator = Kernel::bspline(3);
+  Boundary boundary = Boundary::Mirror;
+  bool min_error = true;  // false: conventional normalised weighted average
+  double image_width = 0, image_height = 0;
+};
+
+}  // namespace sis

@@ -1,0 +1,36 @@
+#pragma once
+// Per-axis weight tables: the plan shared by acquisition and resampling.
+// For each target index, the source indices (already folded into [0, sources)
+// by the boundary rule, sorted, duplicates merged) and their weights.
+#include <functional>
+#include <utility>
+#include <vector>
+
+#include "sis/boundary.h"
+
+namespace sis {
+
+struct AxisWeights {
+  long targets = 0, sources = 0;
+  std::vector<long> offset;  // targets + 1 entries into index/weight
+  std::vector<long> index;
+  std::vector<double> weight;
+
+  long begin(long t) const { return offset[t]; }
+  long end(long t) const { return offset[t + 1]; }
+  double sum(long t) const;  // sum of the weights of target t
+  // The transpose: for each source, the targets it contributes to.
+  AxisWeights transposed() const;
+};
+
+// Builds a table: for target t, the extended source indices k in
+// range(t) = [first, last] get weight(t, k); k is folded by the boundary rule.
+AxisWeights make_axis_weights(long targets, long sources, Boundary boundary,
+                              const std::function<std::pair<long, long>(long)>& range,
+                              const std::function<double(long, long)>& weight);
+
+// Runs fn(begin, end) over [0, n) split into contiguous chunks on up to
+// `threads` threads. Each index is handled by exactly one call.
+void parallel_for(long n, int threads, const std::function<void(long, long)>& fn);
+
+}  // namespace sis

@@ -1,0 +1,175 @@
+#include "sis/acquisition.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace sis {
+
+namespace {
+
+// Weights from the samples (i + 1/2) * step, i in [0, samples), to the
+// coefficients n along one axis of a separable lattice.
+AxisWeights acquisition_axis(int axis, long coefficients, long samples, double extent,
+                             const Lattice& lattice, const Kernel& kernel, Boundary boundary,
+                             Method method) {
+  const double step = extent / samples;  // sample spacing, output pixels
+  const double h = lattice.axis_step(axis);
+  const double support = kernel.radius() * h;
+  auto range = [&](long n) {
+    const double p = lattice.axis_position(axis, n);
+    return std::pair<long, long>(static_cast<long>(std::ceil((p - support) / step - 0.5)),
+                                 static_cast<long>(std::floor((p + support) / step - 0.5)));
+  };
+  // Quadrature weight step / h makes r[n] an inner product in lattice units.
+  const double scale = (method == Method::MinError) ? step / h : 1.0;
+  auto weight = [&](long n, long i) {
+    const double p = lattice.axis_position(axis, n);
+    return scale * kernel.eval(((i + 0.5) * step - p) / h);
+  };
+  AxisWeights w = make_axis_weights(coefficients, samples, boundary, range, weight);
+  if (method == Method::Conventional) {
+    for (long n = 0; n < coefficients; ++n) {
+      const double s = w.sum(n);
+      if (!(s > 0)) {
+        std::ostringstream m;
+        m << "conventional acquisition(): no input sample under the " << kernel.name()
+          << " filter of pixel " << n << " along " << (axis ? "y" : "x") << " (" << samples
+          << " samples for " << coefficients << " pixels)";
+        throw std::invalid_argument(m.str());
+      }
+      for (long e = w.begin(n); e < w.end(n); ++e) w.weight[e] /= s;
+    }
+  }
+  return w;
+}
+
+}  // namespace
+
+AcquisitionPlan::AcquisitionPlan(long input_width, long input_height, int channels,
+                                 double image_width, double image_height, const Lattice& lattice,
+                                 const Kernel& generator, Boundary boundary, Method method)
+    : channels_(channels),
+      image_w_(image_width),
+      image_h_(image_height),
+      lattice_(lattice),
+      generator_(generator),
+      boundary_(boundary),
+      method_(method) {
+  if (input_width < 1 || input_height < 1 || channels < 1) {
+    std::ostringstream m;
+    m << "AcquisitionPlan(): empty input " << input_width << " x " << input_height << " x "
+      << channels;
+    throw std::invalid_argument(m.str());
+  }
+  if (method == Method::MinError && !generator.is_bspline())
+    throw std::invalid_argument("AcquisitionPlan(): min-error needs a B-spline generator, not " +
+                                generator.name());
+  const auto extent = lattice.extent(image_width, image_height);
+  wx_ = acquisition_axis(0, extent[0], input_width, image_width, lattice, generator, boundary,
+                         method);
+  wy_ = acquisition_axis(1, extent[1], input_height, image_height, lattice, generator, boundary,
+                         method);
+}
+
+Acquisition::Acquisition(const AcquisitionPlan& plan, int threads)
+    : plan_(plan),
+      threads_(threads < 1 ? 1 : threads),
+      acc_(plan.coefficients_x(), plan.coefficients_y(), plan.channels()),
+      cursor_(plan.coefficients_y()) {
+  for (long n = 0; n < plan.coefficients_y(); ++n) cursor_[n] = plan.weights_y().begin(n);
+}
+
+void Acquisition::add_rows(long y0, long y1, const float* rows) { add(y0, y1, rows); }
+void Acquisition::add_rows(long y0, long y1, const double* rows) { add(y0, y1, rows); }
+
+template <typename T>
+void Acquisition::add(long y0, long y1, const T* rows) {
+  if (y0 != next_row_ || y1 < y0 || y1 > plan_.input_height()) {
+    std::ostringstream m;
+    m << "Acquisition::add_rows(): rows [" << y0 << ", " << y1 << ") out of order (next row "
+      << next_row_ << " of " << plan_.input_height() << ")";
+    throw std::logic_error(m.str());
+  }
+  const int C = plan_.channels();
+  const long win = plan_.input_width(), ncx = plan_.coefficients_x();
+  const AxisWeights& wx = plan_.weights_x();
+  const AxisWeights& wy = plan_.weights_y();
+  const std::size_t hrow = std::size_t(ncx) * C;
+  strip_.assign(hrow * (y1 - y0), 0.0);
+
+  // Horizontal pass: each input row filtered onto the coefficient columns.
+  parallel_for(y1 - y0, threads_, [&](long r0, long r1) {
+    for (long r = r0; r < r1; ++r) {
+      const T* in = rows + std::size_t(r) * win * C;
+      double* out = strip_.data() + r * hrow;
+      for (long n = 0; n < ncx; ++n) {
+        double* o = out + std::size_t(n) * C;
+        for (long e = wx.begin(n); e < wx.end(n); ++e) {
+          const double w = wx.weight[e];
+          const T* s = in + std::size_t(wx.index[e]) * C;
+          for (int c = 0; c < C; ++c) o[c] += w * s[c];
+        }
+      }
+    }
+  });
+
+  // Vertical pass: each coefficient row adds the rows of this strip in its
+  // support, in increasing row order.
+  parallel_for(plan_.coefficients_y(), threads_, [&](long n0, long n1) {
+    for (long n = n0; n < n1; ++n) {
+      long& e = cursor_[n];
+      double* acc = acc_.row(n);
+      while (e < wy.end(n) && wy.index[e] < y1) {
+        const double w = wy.weight[e];
+        const double* h = strip_.data() + std::size_t(wy.index[e] - y0) * hrow;
+        for (std::size_t k = 0; k < hrow; ++k) acc[k] += w * h[k];
+        ++e;
+      }
+    }
+  });
+  next_row_ = y1;
+}
+
+Coefficients Acquisition::finish() {
+  if (next_row_ != plan_.input_height()) {
+    std::ostringstream m;
+    m << "Acquisition::finish(): only " << next_row_ << " of " << plan_.input_height()
+      << " rows were added";
+    throw std::logic_error(m.str());
+  }
+  Coefficients out;
+  out.c = std::move(acc_);
+  out.lattice = plan_.lattice();
+  out.generator = plan_.generator();
+  out.boundary = plan_.boundary();
+  out.min_error = plan_.method() == Method::MinError;
+  out.image_width = plan_.image_width();
+  out.image_height = plan_.image_height();
+  return out;
+}
+
+namespace {
+template <typename T>
+Coefficients acquire_grid(const Grid<T>& input, const AcquisitionPlan& plan, int threads) {
+  if (input.width != plan.input_width() || input.height != plan.input_height() ||
+      input.channels != plan.channels())
+    throw std::invalid_argument("acquire(): image size does not match the plan");
+  Acquisition a(plan, threads);
+  const long strip = 64;
+  for (long y = 0; y < input.height; y += strip) {
+    const long y1 = std::min(input.height, y + strip);
+    a.add_rows(y, y1, input.row(y));
+  }
+  return a.finish();
+}
+}  // namespace
+
+Coefficients acquire(const Image& input, const AcquisitionPlan& plan, int threads) {
+  return acquire_grid(input, plan, threads);
+}
+Coefficients acquire(const Grid<double>& input, const AcquisitionPlan& plan, int threads) {
+  return acquire_grid(input, plan, threads);
+}
+
+}  // namespace sis

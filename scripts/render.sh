@@ -1,0 +1,122 @@
+#!/usr/bin/env bash
+# render.sh SCENE.pov OUT.exr WIDTH HEIGHT [extra povray options...]
+#
+# Renders SCENE.pov with POV-Ray 3.7 to OUT.exr (OpenEXR, half float, linear),
+# WIDTH x HEIGHT pixels, antialiasing off: one ray through each pixel centre
+# (DESIGN.md sections 2 and 9). Settings come from scenes/povray.ini (through
+# POVINI); extra options are passed last and override them, e.g.
+#   scripts/render.sh scenes/zoneplate.pov out/zp.exr 256 256 Declare=ZP_K=201.06
+#
+# Quiet on success (only scene warnings and #debug output, on stderr).
+# POV-Ray writes to a temporary name in OUT's folder, renamed to OUT only on
+# success. On failure POV-Ray's own messages go to stderr, the partial output
+# is removed and the script exits with POV-Ray's exit status (1 error,
+# 2 user abort). Usage errors exit with 64.
+#
+# The Debian build warns on every run when ~/.povray/3.7/povray.conf is
+# missing. POV-Ray finds that file through $HOME, so POV-Ray alone runs with
+# HOME set to a private temporary folder holding a povray.conf: a copy of
+# /etc/povray/3.7/povray.conf plus [Permitted Paths] for the scene's folder,
+# the project's scenes/ and OUT's folder. The user's real home is never read
+# or written; the folder is removed on exit.
+set -euo pipefail
+
+prog=${0##*/}
+usage() {
+  echo "usage: $prog SCENE.pov OUT.exr WIDTH HEIGHT [extra povray options...]" >&2
+  exit 64
+}
+[ $# -ge 4 ] || usage
+scene=$1 out=$2 width=$3 height=$4
+shift 4
+[[ $width =~ ^[1-9][0-9]*$ && $height =~ ^[1-9][0-9]*$ ]] ||
+  { echo "$prog: WIDTH and HEIGHT must be positive integers: '$width' '$height'" >&2; exit 64; }
+[ -f "$scene" ] && [ -r "$scene" ] || { echo "$prog: cannot read scene '$scene'" >&2; exit 64; }
+[[ $out == *.exr ]] || { echo "$prog: output must end in .exr: '$out'" >&2; exit 64; }
+command -v povray >/dev/null ||
+  { echo "$prog: povray not found (run scripts/setup.sh)" >&2; exit 127; }
+
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd -P)
+project_scenes=$(cd "$here/../scenes" && pwd -P)
+ini=$project_scenes/povray.ini
+[ -r "$ini" ] || { echo "$prog: missing $ini" >&2; exit 64; }
+
+scene=$(realpath -e -- "$scene")
+scene_dir=$(dirname -- "$scene")
+mkdir -p -- "$(dirname -- "$out")"
+out=$(realpath -m -- "$out")
+out_dir=$(dirname -- "$out")
+
+# Image buffer: 20 bytes a pixel; keep the whole frame in memory (no spill file).
+mi=$(( (width * height * 20 + 1048575) / 1048576 + 64 ))
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/render-povray.XXXXXX")
+tmp=
+pid=
+cleanup() {
+  [ -n "$pid" ] && kill "$pid" 2>/dev/null && wait "$pid" 2>/dev/null
+  [ -n "$tmp" ] && rm -f -- "$tmp" "${tmp%.exr}.pov-state"
+  rm -rf -- "$work"
+}
+trap cleanup EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
+
+# Private home with a user povray.conf. User paths replace the system ones, so
+# the conf is the system conf plus the folders this render needs.
+conf_dir=$work/home/.povray/3.7
+mkdir -p -- "$conf_dir"
+{
+  if [ -r /etc/povray/3.7/povray.conf ]; then
+    cat /etc/povray/3.7/povray.conf
+  else
+    printf '[File I/O Security]\nrestricted\n[Shellout Security]\nforbidden\n'
+  fi
+  printf '\n; added by %s\n[Permitted Paths]\n' "$prog"
+  printf 'read* = "%s"\n' "$scene_dir" "$project_scenes"
+  printf 'read+write = "%s"\n' "$out_dir"
+} > "$conf_dir/povray.conf"
+
+tmp=$(mktemp --suffix=.exr -- "$out_dir/.${out##*/}.XXXXXX")
+log=$work/povray.log
+
+# Strip the start-up banner (the Unix front end prints it whatever the stream
+# settings) and the section markers; what remains is warnings, #debug output
+# and errors.
+filter_log() {
+  awk '
+    /^Persistence of Vision\(tm\) Ray Tracer Version/ { banner = 1 }
+    banner && /^Support libraries used by POV-Ray:/ { libs = 1 }
+    banner && libs && /^$/ { banner = 0; libs = 0; next }
+    banner { next }
+    /^==== \[[A-Za-z ]+\.\.\.\] =+$/ { next }
+    /^POV-Ray finished$/ { next }
+    { print }
+  ' "$log" | sed -e '/./,$!d'
+}
+
+set +e
+HOME=$work/home POVINI=$ini povray \
+  +I"$scene" +O"$tmp" +W"$width" +H"$height" \
+  -A +FE -D -P +MI"$mi" +L"$scene_dir" \
+  "$@" >"$log" 2>&1 </dev/null &
+pid=$!
+wait "$pid"
+rc=$?
+pid=
+set -e
+
+if [ "$rc" -ne 0 ]; then
+  filter_log >&2
+  echo "$prog: povray failed with status $rc rendering $scene" >&2
+  exit "$rc"
+fi
+if [ ! -s "$tmp" ]; then
+  filter_log >&2
+  echo "$prog: povray reported success but wrote no image for $scene" >&2
+  exit 1
+fi
+filter_log >&2
+chmod "$(printf '%o' $(( 0666 & ~0$(umask) )))" -- "$tmp"  # mktemp makes 0600
+mv -f -- "$tmp" "$out"
+tmp=

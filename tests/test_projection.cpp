@@ -1,0 +1,361 @@
+// Acquisition, projection and resampling: against slow direct sums, and the
+// identities of the orthogonal projection (DESIGN.md sections 2 to 5).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include "sis/projection.h"
+
+using namespace sis;
+
+namespace {
+
+const double kPi = std::acos(-1.0);
+const Boundary kRules[] = {Boundary::Mirror, Boundary::Periodic};
+
+// Point samples of f at ((i + 1/2) W / win, (j + 1/2) H / hin), the
+// supersampled input of an image of W x H output pixels.
+Image sample(const std::function<double(double, double, int)>& f, long win, long hin, int channels,
+             double W, double H) {
+  Image img(win, hin, channels);
+  for (long j = 0; j < hin; ++j)
+    for (long i = 0; i < win; ++i)
+      for (int c = 0; c < channels; ++c)
+        img.at(i, j, c) = static_cast<float>(f((i + 0.5) * W / win, (j + 0.5) * H / hin, c));
+  return img;
+}
+
+Image random_image(long w, long h, int c, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0, 1);
+  Image img(w, h, c);
+  for (float& v : img.data) v = u(rng);
+  return img;
+}
+
+Coefficients project_with(const Image& in, long w, long h, const Kernel& g, Method m, Boundary b,
+                          int threads = 1) {
+  ProjectionOptions o;
+  o.generator = g;
+  o.method = m;
+  o.boundary = b;
+  o.threads = threads;
+  return project(in, w, h, o);
+}
+
+// 1-D Gram entries <b_d, b_d(. - k)> by Gauss-Legendre on the knot pieces,
+// independent of the autocorrelation formula.
+double gram_entry(int d, int k) {
+  static const double X[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563,
+                              0.8611363115940526};
+  static const double Wt[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461,
+                               0.3478548451374538};
+  // pieces of width 1/2 (knots on the half-integer grid); 4 points exact to
+  // degree 7 per piece would not do for 2d = 14: subdivide each piece 8 times.
+  const double r = 0.5 * (d + 1);
+  double s = 0;
+  const int pieces = 16 * (d + 1);
+  const double h = 2 * r / pieces;
+  for (int p = 0; p < pieces; ++p) {
+    const double m = -r + (p + 0.5) * h;
+    for (int i = 0; i < 4; ++i) {
+      const double x = m + 0.5 * h * X[i];
+      s += 0.5 * h * Wt[i] * bspline(d, x) * bspline(d, x - k);
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST(Acquisition, MatchesDirectSumAtAnyRatio) {
+  // Output 9 x 7 from 23 x 19 samples: non-integer ratios on both axes.
+  const long W = 9, H = 7, win = 23, hin = 19;
+  const Image in = random_image(win, hin, 2, 42);
+  const Kernel kernels[] = {Kernel::bspline(0), Kernel::bspline(1), Kernel::bspline(3),
+                            Kernel::bspline(6), Kernel::mitchell(),  Kernel::lanczos(3),
+                            Kernel::gaussian()};
+  for (const Kernel& k : kernels)
+    for (Method m : {Method::MinError, Method::Conventional}) {
+      if (m == Method::MinError && !k.is_bspline()) continue;
+      for (Boundary b : kRules) {
+        const AcquisitionPlan plan(win, hin, 2, W, H, Lattice::cartesian(), k, b, m);
+        const Coefficients got = acquire(in, plan, 2);
+        const double dx = double(W) / win, dy = double(H) / hin;
+        for (long n2 = 0; n2 < H; ++n2)
+          for (long n1 = 0; n1 < W; ++n1)
+            for (int c = 0; c < 2; ++c) {
+              double num = 0, wsum = 0;
+              for (long j = -3 * hin; j < 4 * hin; ++j)
+                for (long i = -3 * win; i < 4 * win; ++i) {
+                  const double w =
+                      k.eval((i + 0.5) * dx - (n1 + 0.5)) * k.eval((j + 0.5) * dy - (n2 + 0.5));
+                  if (w == 0) continue;
+                  num += w * in.at(extend_index(i, win, b), extend_index(j, hin, b), c);
+                  wsum += w;
+                }
+              const double ref = m == Method::MinError ? num * dx * dy : num / wsum;
+              EXPECT_NEAR(got.c.at(n1, n2, c), ref, 1e-12)
+                  << k.name() << " " << method_name(m) << " " << boundary_name(b);
+            }
+      }
+    }
+}
+
+TEST(Acquisition, BitIdenticalForAnyStripAndThreadCount) {
+  const Image in = random_image(203, 171, 3, 1);
+  const AcquisitionPlan plan(203, 171, 3, 50, 40, Lattice::cartesian(), Kernel::bspline(3),
+                             Boundary::Mirror, Method::MinError);
+  const Coefficients ref = acquire(in, plan, 1);
+  for (int threads : {1, 2, 5})
+    for (long strip : {1L, 13L, 171L}) {
+      Acquisition a(plan, threads);
+      for (long y = 0; y < in.height; y += strip)
+        a.add_rows(y, std::min(in.height, y + strip), in.row(y));
+      EXPECT_EQ(a.finish().c.data, ref.c.data) << threads << " " << strip;
+    }
+}
+
+TEST(Acquisition, RowsMustArriveInOrder) {
+  const Image in = random_image(8, 8, 1, 1);
+  const AcquisitionPlan plan(8, 8, 1, 4, 4, Lattice::cartesian(), Kernel::bspline(1),
+                             Boundary::Mirror, Method::MinError);
+  Acquisition a(plan);
+  EXPECT_THROW(a.add_rows(2, 4, in.row(2)), std::logic_error);
+  a.add_rows(0, 4, in.row(0));
+  EXPECT_THROW(a.finish(), std::logic_error);
+  EXPECT_THROW(AcquisitionPlan(8, 8, 1, 4, 4, Lattice::cartesian(), Kernel::mitchell(),
+                               Boundary::Mirror, Method::MinError),
+               std::invalid_argument);
+}
+
+TEST(Projection, CoordinateConvention) {
+  // f = x + 2y sampled at ((i + 1/2)/s, (j + 1/2)/s): the tent projection
+  // reproduces it, so f_app at the pixel centre (n + 1/2, m + 1/2) must be
+  // n + 1/2 + 2(m + 1/2). Samples at i/s would shift it by 1/(2s).
+  const long N = 40, s = 3;
+  const Image in = sample([](double x, double y, int) { return x + 2 * y; }, N * s, N * s, 1, N, N);
+  const Coefficients k = project_with(in, N, N, Kernel::bspline(1), Method::MinError,
+                                      Boundary::Mirror);
+  for (long m = 15; m < 25; ++m)
+    for (long n = 15; n < 25; ++n)
+      EXPECT_NEAR(evaluate(k, {n + 0.5, m + 0.5}), n + 0.5 + 2 * (m + 0.5), 2e-5);
+}
+
+TEST(Projection, BoxAtIntegerFactorIsTheAreaAverage) {
+  for (long s : {1L, 2L, 3L, 4L}) {
+    const long N = 11;
+    const Image in = random_image(N * s, N * s, 3, unsigned(s));
+    for (Method m : {Method::MinError, Method::Conventional}) {
+      const Coefficients k = project_with(in, N, N, Kernel::bspline(0), m, Boundary::Mirror);
+      for (long y = 0; y < N; ++y)
+        for (long x = 0; x < N; ++x)
+          for (int c = 0; c < 3; ++c) {
+            double sum = 0;
+            for (long j = 0; j < s; ++j)
+              for (long i = 0; i < s; ++i) sum += in.at(x * s + i, y * s + j, c);
+            EXPECT_NEAR(k.c.at(x, y, c), sum / (s * s), 1e-15) << s;
+          }
+    }
+  }
+}
+
+TEST(Projection, ReproducesPolynomialsUpToDegreeD) {
+  // Away from the border: the mirror rule's effect decays like |z_1|^k, and
+  // z_1 = -0.757 for d = 7 (the degree-15 spline's largest pole), so 64
+  // pixels in it is below 1e-8.
+  const long N = 140, s = 2, lo = 64, hi = 76;
+  for (int d = 0; d <= kMaxDegree; ++d) {
+    std::mt19937 rng(d);
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::vector<double> coef((d + 1) * (d + 1));
+    for (double& v : coef) v = u(rng);
+    auto poly = [&](double x, double y, int) {
+      const double a = (x - N / 2.0) / 16, b = (y - N / 2.0) / 16;
+      double sum = 0, pa = 1;
+      for (int i = 0; i <= d; ++i, pa *= a) {
+        double pb = 1;
+        for (int j = 0; j <= d; ++j, pb *= b) sum += coef[i * (d + 1) + j] * pa * pb;
+      }
+      return sum;
+    };
+    // Float samples carry relative rounding 6e-8 of values up to ~1e2.
+    const Image in = sample(poly, N * s, N * s, 1, N, N);
+    const Coefficients k = project_with(in, N, N, Kernel::bspline(d), Method::MinError,
+                                        Boundary::Mirror);
+    std::mt19937 pick(99);
+    std::uniform_real_distribution<double> where(lo, hi);
+    for (int t = 0; t < 40; ++t) {
+      const double x = where(pick), y = where(pick);
+      EXPECT_NEAR(evaluate(k, {x, y}), poly(x, y, 0), 2e-5) << "degree " << d;
+    }
+  }
+}
+
+TEST(Projection, ResidualOrthogonalAndProjectionIdempotent) {
+  // r[n] = <f, phi_n> by the acquisition's quadrature. With c = P f, the
+  // inner products of f_app, <f_app, phi_n> = sum_m c[m] <phi_m, phi_n>
+  // (Gram entries integrated independently), must equal r: the residual
+  // f - f_app is orthogonal to every phi_n. Prefiltering them returns c:
+  // P(f_app) = f_app.
+  const long N = 24, s = 3;
+  const Image in = random_image(N * s, N * s, 1, 3);
+  for (int d = 0; d <= kMaxDegree; ++d)
+    for (Boundary b : kRules) {
+      ProjectionOptions o;
+      o.generator = Kernel::bspline(d);
+      o.boundary = b;
+      const AcquisitionPlan plan(N * s, N * s, 1, N, N, Lattice::cartesian(), o.generator, b,
+                                 Method::MinError);
+      const Coefficients r = acquire(in, plan);
+      Coefficients k = r;
+      prefilter(k);
+      std::vector<double> g(d + 2);
+      for (int q = 0; q <= d + 1; ++q) g[q] = gram_entry(d, q);
+      Coefficients inner = k;
+      double scale = 0;
+      for (long y = 0; y < N; ++y)
+        for (long x = 0; x < N; ++x) {
+          double sum = 0;
+          for (int q = -d - 1; q <= d + 1; ++q)
+            for (int p = -d - 1; p <= d + 1; ++p)
+              sum += g[std::abs(p)] * g[std::abs(q)] *
+                     k.c.at(extend_index(x + p, N, b), extend_index(y + q, N, b), 0);
+          inner.c.at(x, y, 0) = sum;
+          scale = std::max(scale, std::abs(r.c.at(x, y, 0)));
+        }
+      for (std::size_t q = 0; q < r.c.data.size(); ++q)
+        EXPECT_NEAR(inner.c.data[q], r.c.data[q], 1e-12 * scale) << d << " " << boundary_name(b);
+      Coefficients again = inner;
+      prefilter(again);
+      for (std::size_t q = 0; q < k.c.data.size(); ++q)
+        EXPECT_NEAR(again.c.data[q], k.c.data[q], 1e-9) << d << " " << boundary_name(b);
+    }
+}
+
+TEST(Projection, ApproximationOrder) {
+  // A smooth periodic image, L2 error of f_app against f on a fine grid, at
+  // lattice steps h = 1/24 and 1/48 of its period: the error falls like
+  // h^(d+1). Double samples: float rounding would floor the error near 3e-9,
+  // where degrees 5 to 7 still fall.
+  auto f = [](double u, double v) { return std::cos(2 * kPi * u + 0.3) * std::sin(2 * kPi * v + 0.1); };
+  for (int d = 0; d <= kMaxDegree; ++d) {
+    double err[2];
+    for (int t = 0; t < 2; ++t) {
+      const long N = t ? 48 : 24, s = 4;
+      Grid<double> in(N * s, N * s, 1);
+      for (long j = 0; j < N * s; ++j)
+        for (long i = 0; i < N * s; ++i) in.at(i, j, 0) = f((i + 0.5) / s / N, (j + 0.5) / s / N);
+      const AcquisitionPlan plan(N * s, N * s, 1, N, N, Lattice::cartesian(), Kernel::bspline(d),
+                                 Boundary::Periodic, Method::MinError);
+      Coefficients k = acquire(in, plan);
+      prefilter(k);
+      double sum = 0;
+      const long fine = 5;
+      for (long j = 0; j < N * fine; ++j)
+        for (long i = 0; i < N * fine; ++i) {
+          const double x = (i + 0.5) / fine, y = (j + 0.5) / fine;
+          const double e = evaluate(k, {x, y}) - f(x / N, y / N);
+          sum += e * e;
+        }
+      err[t] = std::sqrt(sum / (N * fine * N * fine));
+    }
+    const double slope = std::log(err[0] / err[1]) / std::log(2.0);
+    EXPECT_NEAR(slope, d + 1, 0.3) << "degree " << d << " errors " << err[0] << " " << err[1];
+  }
+}
+
+TEST(Projection, MeanPreservedPeriodic) {
+  const long N = 32, s = 2;
+  const Image in = random_image(N * s, N * s, 1, 8);
+  double mean_in = 0;
+  for (float v : in.data) mean_in += v;
+  mean_in /= in.data.size();
+  for (int d = 0; d <= kMaxDegree; ++d) {
+    const Coefficients k =
+        project_with(in, N, N, Kernel::bspline(d), Method::MinError, Boundary::Periodic);
+    double mean_c = 0;
+    for (double v : k.c.data) mean_c += v;
+    EXPECT_NEAR(mean_c / k.c.data.size(), mean_in, 1e-12) << d;
+  }
+}
+
+TEST(Projection, ConventionalPreservesConstants) {
+  const Image in = sample([](double, double, int c) { return 0.25 + c; }, 37, 29, 3, 10, 8);
+  for (const char* g : {"box", "tent", "cubic", "mitchell", "gaussian", "catmull-rom", "lanczos3"}) {
+    const Coefficients k =
+        project_with(in, 10, 8, Kernel::parse(g), Method::Conventional, Boundary::Mirror);
+    for (long y = 0; y < 8; ++y)
+      for (long x = 0; x < 10; ++x)
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(k.c.at(x, y, c), 0.25 + c, 1e-6) << g;
+  }
+}
+
+TEST(Resample, DisplayModesMatchTheirTapsAndDirectEvaluation) {
+  const long N = 20;
+  const Image in = random_image(N * 3, N * 3, 2, 11);
+  for (int d = 0; d <= kMaxDegree; ++d)
+    for (Boundary b : kRules) {
+      const Coefficients k = project_with(in, N, N, Kernel::bspline(d), Method::MinError, b);
+      const Image centred = resample(k, Display::centred(), N, N);
+      const Image pixel = resample(k, Display::pixel(), N, N);
+      const Image aa = resample(k, Display::antialiased_2x2(), N, N);
+      const Image offs = resample(k, Display::parse("offsets:0.1,-0.2;-0.3,0.05;0.4,0.4"), N, N);
+      const Image bigger = resample(k, Display::centred(), 27, 13);
+      for (long y = 0; y < N; ++y)
+        for (long x = 0; x < N; ++x)
+          for (int c = 0; c < 2; ++c) {
+            // centred: taps b_d(k); pixel: taps b_{d+1}(k)
+            double tc = 0, tp = 0;
+            for (int q = -d - 2; q <= d + 2; ++q)
+              for (int p = -d - 2; p <= d + 2; ++p) {
+                const double cv = k.c.at(extend_index(x + p, N, b), extend_index(y + q, N, b), c);
+                tc += bspline(d, p) * bspline(d, q) * cv;
+                tp += bspline(d + 1, p) * bspline(d + 1, q) * cv;
+              }
+            EXPECT_NEAR(centred.at(x, y, c), tc, 1e-5);
+            EXPECT_NEAR(pixel.at(x, y, c), tp, 1e-5);
+            double e = 0;
+            for (double dy : {-0.25, 0.25})
+              for (double dx : {-0.25, 0.25}) e += evaluate(k, {x + 0.5 + dx, y + 0.5 + dy}, c);
+            EXPECT_NEAR(aa.at(x, y, c), e / 4, 1e-5);
+            const double o = (evaluate(k, {x + 0.6, y + 0.3}, c) + evaluate(k, {x + 0.2, y + 0.55}, c) +
+                              evaluate(k, {x + 0.9, y + 0.9}, c)) / 3;
+            EXPECT_NEAR(offs.at(x, y, c), o, 1e-5);
+          }
+      for (long y = 0; y < 13; ++y)
+        for (long x = 0; x < 27; ++x)
+          EXPECT_NEAR(bigger.at(x, y, 1), evaluate(k, {(x + 0.5) * N / 27.0, (y + 0.5) * N / 13.0}, 1),
+                      1e-5);
+    }
+  EXPECT_THROW(Display::parse("offsets:1,2;3"), std::invalid_argument);
+  EXPECT_THROW(Display::parse("3x3"), std::invalid_argument);
+}
+
+TEST(Resample, PixelModeIsTheExactPixelAverage) {
+  // At another size the pixel mode equals the average of f_app over each
+  // final pixel, here by a fine midpoint sum of direct evaluations.
+  const long N = 12;
+  const Image in = random_image(N * 2, N * 2, 1, 4);
+  const Coefficients k = project_with(in, N, N, Kernel::bspline(2), Method::MinError, Boundary::Mirror);
+  const Image out = resample(k, Display::pixel(), 5, 7);
+  const double sx = N / 5.0, sy = N / 7.0;
+  for (long y = 0; y < 7; ++y)
+    for (long x = 0; x < 5; ++x) {
+      double s = 0;
+      const int m = 60;
+      for (int j = 0; j < m; ++j)
+        for (int i = 0; i < m; ++i) s += evaluate(k, {(x + (i + 0.5) / m) * sx, (y + (j + 0.5) / m) * sy});
+      EXPECT_NEAR(out.at(x, y, 0), s / (m * m), 2e-3);  // midpoint rule error ~ (sx/m)^2
+    }
+}
+
+TEST(Projection, ConventionalFinalImageIsTheFilteredPixels) {
+  const Image in = random_image(40, 40, 1, 9);
+  const Coefficients k = project_with(in, 10, 10, Kernel::mitchell(), Method::Conventional, Boundary::Mirror);
+  const Image p = final_image(k, Display::centred(), 10, 10);
+  for (long y = 0; y < 10; ++y)
+    for (long x = 0; x < 10; ++x) EXPECT_EQ(p.at(x, y, 0), static_cast<float>(k.c.at(x, y, 0)));
+}
