@@ -46,6 +46,11 @@ scene_dir=$(dirname -- "$scene")
 mkdir -p -- "$(dirname -- "$out")"
 out=$(realpath -m -- "$out")
 out_dir=$(dirname -- "$out")
+# POV-Ray splits option values at blanks unless they are in double quotes, so
+# paths are passed quoted; a double quote inside a path cannot be passed.
+case "$scene$out" in
+  *'"'*) echo "$prog: paths must not contain a double quote" >&2; exit 64 ;;
+esac
 
 # Image buffer: 20 bytes a pixel; keep the whole frame in memory (no spill file).
 mi=$(( (width * height * 20 + 1048575) / 1048576 + 64 ))
@@ -97,8 +102,8 @@ filter_log() {
 
 set +e
 HOME=$work/home POVINI=$ini povray \
-  +I"$scene" +O"$tmp" +W"$width" +H"$height" \
-  -A +FE -D -P +MI"$mi" +L"$scene_dir" \
+  +I"\"$scene\"" +O"\"$tmp\"" +W"$width" +H"$height" \
+  -A +FE -D -P +MI"$mi" +L"\"$scene_dir\"" \
   "$@" >"$log" 2>&1 </dev/null &
 pid=$!
 wait "$pid"

@@ -1,0 +1,79 @@
+#pragma once
+// Image I/O through OpenImageIO: strip reading for streaming acquisition,
+// atomic writing (temporary name in the same folder, then rename), and
+// coefficient files (float EXR whose metadata records the approximation).
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sis/image.h"
+
+namespace sis {
+
+// A file that cannot be read as wanted. The message names the file.
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+// A file that cannot be written. The message names the file.
+struct OutputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+using Metadata = std::vector<std::pair<std::string, std::string>>;
+
+// Reads an image in row strips as float, whatever its stored type.
+class ImageReader {
+ public:
+  explicit ImageReader(const std::string& path);  // throws InputError
+  ~ImageReader();
+  ImageReader(const ImageReader&) = delete;
+  ImageReader& operator=(const ImageReader&) = delete;
+
+  const std::string& path() const { return path_; }
+  long width() const;
+  long height() const;
+  int channels() const;
+  long data_y() const;  // first row of the data window
+  std::vector<std::string> channel_names() const;
+  int alpha_channel() const;  // -1 if none
+  std::string format_name() const;
+  // A string attribute of the file's metadata ("" when absent).
+  std::string attribute(const std::string& name) const;
+  // Rows aligned to the file's storage (tile height or 64 scanlines).
+  long preferred_strip() const;
+  // Reads rows [y0, y1) (0-based within the data window) into `rows`,
+  // interleaved floats. Throws InputError on a truncated or corrupt file.
+  void read_rows(long y0, long y1, float* rows);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::string path_;
+};
+
+// Reads a whole image as float.
+Image read_image(const std::string& path);
+
+// Writes an image. EXR (and other float formats) as float with the metadata
+// as string attributes; 8-bit formats (PNG, JPEG, 8-bit TIFF...) sRGB-encoded
+// and clamped to [0, 1], alpha (premultiplied) divided out first.
+// Written to a temporary name in the same folder, then renamed: never a
+// partial file. Throws OutputError naming the file.
+void write_image(const std::string& path, const Image& image,
+                 const std::vector<std::string>& channel_names = {},
+                 const Metadata& metadata = {}, int alpha_channel = -1);
+
+// True for the formats written 8-bit sRGB by write_image.
+bool is_8bit_format(const std::string& path);
+
+// Coefficient files: a float EXR of the coefficient grid whose metadata
+// records lattice, generator, degree, boundary, method and frame size.
+void write_coefficients(const std::string& path, const Coefficients& k,
+                        const std::vector<std::string>& channel_names = {},
+                        const Metadata& extra = {});
+bool is_coefficient_file(const ImageReader& reader);
+Coefficients read_coefficients(ImageReader& reader);
+
+}  // namespace sis

@@ -1,0 +1,248 @@
+#include "sis/imageio.h"
+
+#include <OpenImageIO/imageio.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+namespace sis {
+
+namespace fs = std::filesystem;
+using OIIO::ImageInput;
+using OIIO::ImageOutput;
+using OIIO::ImageSpec;
+using OIIO::TypeDesc;
+
+struct ImageReader::Impl {
+  std::unique_ptr<ImageInput> in;
+  ImageSpec spec;
+};
+
+ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path + ": no such file");
+  if (fs::is_directory(path, ec)) throw InputError(path + ": is a folder, not an image");
+  impl_->in = ImageInput::open(path);
+  if (!impl_->in) {
+    std::string why = OIIO::geterror();
+    if (why.empty()) why = "not an image OpenImageIO can read";
+    throw InputError(path + ": " + why);
+  }
+  impl_->spec = impl_->in->spec();
+  const ImageSpec& s = impl_->spec;
+  if (s.width < 1 || s.height < 1 || s.nchannels < 1) {
+    std::ostringstream m;
+    m << path << ": empty image (" << s.width << " x " << s.height << ", " << s.nchannels
+      << " channels)";
+    throw InputError(m.str());
+  }
+  if (s.depth > 1) throw InputError(path + ": volume images are not supported");
+  if (s.deep) throw InputError(path + ": deep images are not supported");
+}
+
+ImageReader::~ImageReader() {
+  if (impl_ && impl_->in) impl_->in->close();
+}
+
+long ImageReader::width() const { return impl_->spec.width; }
+long ImageReader::height() const { return impl_->spec.height; }
+int ImageReader::channels() const { return impl_->spec.nchannels; }
+long ImageReader::data_y() const { return impl_->spec.y; }
+int ImageReader::alpha_channel() const { return impl_->spec.alpha_channel; }
+std::string ImageReader::format_name() const { return impl_->in->format_name(); }
+std::vector<std::string> ImageReader::channel_names() const { return impl_->spec.channelnames; }
+std::string ImageReader::attribute(const std::string& name) const {
+  return impl_->spec.get_string_attribute(name);
+}
+
+long ImageReader::preferred_strip() const {
+  const long th = impl_->spec.tile_height;
+  if (th > 0) return th * std::max(1L, 64 / th);
+  return 64;
+}
+
+void ImageReader::read_rows(long y0, long y1, float* rows) {
+  const ImageSpec& s = impl_->spec;
+  if (y0 < 0 || y1 > s.height || y1 < y0) {
+    std::ostringstream m;
+    m << path_ << ": rows [" << y0 << ", " << y1 << ") outside the image";
+    throw InputError(m.str());
+  }
+  if (y1 == y0) return;
+  bool ok;
+  if (s.tile_width > 0)
+    ok = impl_->in->read_tiles(0, 0, s.x, s.x + s.width, s.y + y0, s.y + y1, s.z, s.z + 1, 0,
+                               s.nchannels, TypeDesc::FLOAT, rows);
+  else
+    ok = impl_->in->read_scanlines(0, 0, s.y + y0, s.y + y1, s.z, 0, s.nchannels, TypeDesc::FLOAT,
+                                   rows);
+  if (!ok) {
+    std::string why = impl_->in->geterror();
+    if (why.empty()) why = "read failed";
+    std::ostringstream m;
+    m << path_ << ": cannot read rows " << y0 << " to " << y1 - 1 << " (truncated or corrupt?): "
+      << why;
+    throw InputError(m.str());
+  }
+}
+
+Image read_image(const std::string& path) {
+  ImageReader r(path);
+  Image img(r.width(), r.height(), r.channels());
+  const long strip = r.preferred_strip();
+  for (long y = 0; y < r.height(); y += strip)
+    r.read_rows(y, std::min(r.height(), y + strip), img.row(y));
+  return img;
+}
+
+bool is_8bit_format(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff" ||
+         ext == ".bmp" || ext == ".tga" || ext == ".ppm" || ext == ".pnm";
+}
+
+namespace {
+
+float srgb_encode(float v) {
+  if (!(v > 0)) return 0.0f;
+  if (v >= 1) return 1.0f;
+  return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+// Writes `spec` + pixels to a temporary file beside `path`, then renames.
+void write_atomically(const std::string& path, const ImageSpec& spec, TypeDesc data_type,
+                      const void* data) {
+  const fs::path target(path);
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw OutputError(path + ": folder " + dir.string() + " does not exist");
+  const fs::path tmp = dir / ("." + target.stem().string() + ".tmp" + std::to_string(::getpid()) +
+                              target.extension().string());
+  auto out = ImageOutput::create(tmp.string());
+  if (!out) throw OutputError(path + ": cannot write this format: " + OIIO::geterror());
+  bool ok = out->open(tmp.string(), spec) && out->write_image(data_type, data) && out->close();
+  if (!ok) {
+    const std::string why = out->geterror();
+    out.reset();
+    fs::remove(tmp, ec);
+    throw OutputError(path + ": " + (why.empty() ? "write failed" : why));
+  }
+  out.reset();
+  fs::rename(tmp, target, ec);
+  if (ec) {
+    std::error_code ignore;
+    fs::remove(tmp, ignore);
+    throw OutputError(path + ": cannot rename the finished file into place: " + ec.message());
+  }
+}
+
+}  // namespace
+
+void write_image(const std::string& path, const Image& image,
+                 const std::vector<std::string>& channel_names, const Metadata& metadata,
+                 int alpha_channel) {
+  if (image.width < 1 || image.height < 1 || image.channels < 1)
+    throw OutputError(path + ": refusing to write an empty image");
+  const bool eight = is_8bit_format(path);
+  ImageSpec spec(int(image.width), int(image.height), image.channels,
+                 eight ? TypeDesc::UINT8 : TypeDesc::FLOAT);
+  if (int(channel_names.size()) == image.channels) spec.channelnames = channel_names;
+  if (alpha_channel >= 0 && alpha_channel < image.channels) spec.alpha_channel = alpha_channel;
+  for (const auto& [k, v] : metadata) spec.attribute(k, v);
+  if (!eight) {
+    write_atomically(path, spec, TypeDesc::FLOAT, image.data.data());
+    return;
+  }
+  // 8-bit: colour channels sRGB-encoded (after dividing out premultiplied
+  // alpha), alpha linear; everything clamped to [0, 1].
+  spec.attribute("oiio:ColorSpace", "sRGB");
+  if (spec.alpha_channel >= 0) spec.attribute("oiio:UnassociatedAlpha", 1);
+  const int C = image.channels, a = spec.alpha_channel;
+  std::vector<float> enc(image.data.size());
+  for (std::size_t p = 0; p < image.data.size() / C; ++p) {
+    const float* in = image.data.data() + p * C;
+    const float alpha = a >= 0 ? std::clamp(in[a], 0.0f, 1.0f) : 1.0f;
+    for (int c = 0; c < C; ++c) {
+      if (c == a)
+        enc[p * C + c] = alpha;
+      else
+        enc[p * C + c] = srgb_encode(a >= 0 ? (alpha > 0 ? in[c] / alpha : 0.0f) : in[c]);
+    }
+  }
+  write_atomically(path, spec, TypeDesc::FLOAT, enc.data());
+}
+
+void write_coefficients(const std::string& path, const Coefficients& k,
+                        const std::vector<std::string>& channel_names, const Metadata& extra) {
+  if (is_8bit_format(path))
+    throw OutputError(path + ": coefficient files must be float EXR, not an 8-bit format");
+  Image grid(k.c.width, k.c.height, k.c.channels);
+  for (std::size_t q = 0; q < grid.data.size(); ++q) grid.data[q] = static_cast<float>(k.c.data[q]);
+  auto num = [](double v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+  };
+  const Vec2 o = k.lattice.origin();
+  const auto& L = k.lattice.matrix();
+  Metadata md = {
+      {"sis:coefficients", "1"},
+      {"sis:lattice", k.lattice.separable() ? "cartesian" : "general"},
+      {"sis:lattice_origin", num(o.x) + " " + num(o.y)},
+      {"sis:lattice_matrix", num(L[0]) + " " + num(L[1]) + " " + num(L[2]) + " " + num(L[3])},
+      {"sis:generator", k.generator.name()},
+      {"sis:degree", std::to_string(k.generator.degree())},
+      {"sis:boundary", boundary_name(k.boundary)},
+      {"sis:method", k.min_error ? "min-error" : "conventional"},
+      {"sis:image_width", num(k.image_width)},
+      {"sis:image_height", num(k.image_height)},
+  };
+  md.insert(md.end(), extra.begin(), extra.end());
+  write_image(path, grid, channel_names, md);
+}
+
+bool is_coefficient_file(const ImageReader& r) { return r.attribute("sis:coefficients") == "1"; }
+
+Coefficients read_coefficients(ImageReader& r) {
+  if (!is_coefficient_file(r)) throw InputError(r.path() + ": not a coefficient file");
+  auto numbers = [&](const std::string& key, std::size_t count) {
+    std::istringstream s(r.attribute(key));
+    std::vector<double> v;
+    double x;
+    while (s >> x) v.push_back(x);
+    if (v.size() != count) throw InputError(r.path() + ": coefficient file metadata " + key + " is malformed");
+    return v;
+  };
+  Coefficients k;
+  try {
+    const auto o = numbers("sis:lattice_origin", 2);
+    const auto L = numbers("sis:lattice_matrix", 4);
+    k.lattice = Lattice({o[0], o[1]}, {L[0], L[1], L[2], L[3]});
+    k.generator = Kernel::parse(r.attribute("sis:generator"));
+    k.boundary = parse_boundary(r.attribute("sis:boundary"));
+    k.min_error = r.attribute("sis:method") != "conventional";
+    k.image_width = numbers("sis:image_width", 1)[0];
+    k.image_height = numbers("sis:image_height", 1)[0];
+  } catch (const std::invalid_argument& e) {
+    throw InputError(r.path() + ": coefficient file metadata: " + e.what());
+  }
+  Image grid(r.width(), r.height(), r.channels());
+  for (long y = 0; y < r.height(); y += r.preferred_strip())
+    r.read_rows(y, std::min(r.height(), y + r.preferred_strip()), grid.row(y));
+  k.c = Grid<double>(grid.width, grid.height, grid.channels);
+  for (std::size_t q = 0; q < grid.data.size(); ++q) k.c.data[q] = grid.data[q];
+  if (k.lattice.separable()) {
+    const auto e = k.lattice.extent(k.image_width, k.image_height);
+    if (e[0] != k.c.width || e[1] != k.c.height)
+      throw InputError(r.path() + ": coefficient grid size does not match its lattice and frame");
+  }
+  return k;
+}
+
+}  // namespace sis

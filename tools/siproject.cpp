@@ -1,0 +1,313 @@
+// siproject: forms a final image from any image OpenImageIO reads, treated as
+// point samples of a continuous image, by orthogonal projection onto a
+// shift-invariant space (min-error) or a conventional filter.
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+#include <sstream>
+#include <thread>
+
+#include "sis/imageio.h"
+#include "sis/projection.h"
+
+namespace fs = std::filesystem;
+using namespace sis;
+
+namespace {
+
+constexpr int kExitUsage = 2, kExitInput = 3, kExitOutput = 4;
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Options {
+  std::string input, output, coeffs;
+  double factor = 0;
+  std::string size;
+  std::string generator = "cubic", method = "min-error", display, boundary = "mirror";
+  std::string nonfinite = "error", prefilter = "fft";
+  int threads = 0;
+  bool verbose = false, quiet = false;
+  bool generator_given = false, method_given = false, boundary_given = false;
+};
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// "WxH" with positive integers.
+std::pair<long, long> parse_size(const std::string& s) {
+  long w = 0, h = 0;
+  char x = 0, extra = 0;
+  std::istringstream in(s);
+  if (!(in >> w >> x >> h) || (x != 'x' && x != 'X') || (in >> extra) || w < 1 || h < 1)
+    throw UsageError("--size '" + s + "': expected WxH with positive whole numbers, e.g. 1000x750");
+  return {w, h};
+}
+
+bool same_file(const std::string& a, const std::string& b) {
+  std::error_code ec1, ec2;
+  const fs::path pa = fs::weakly_canonical(a, ec1), pb = fs::weakly_canonical(b, ec2);
+  return !ec1 && !ec2 && pa == pb;
+}
+
+class Progress {
+ public:
+  Progress(bool enabled, const char* what) : enabled_(enabled), what_(what), start_(Clock::now()) {}
+  void update(double fraction) {
+    if (!enabled_ || seconds_since(start_) < 1.0) return;
+    const int pct = static_cast<int>(100 * fraction);
+    if (pct == last_) return;
+    last_ = pct;
+    shown_ = true;
+    std::fprintf(stderr, "\rsiproject: %s %3d%%", what_, pct);
+    std::fflush(stderr);
+  }
+  ~Progress() {
+    if (shown_) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  bool enabled_;
+  const char* what_;
+  Clock::time_point start_;
+  int last_ = -1;
+  bool shown_ = false;
+};
+
+int run(const Options& o) {
+  const auto t_start = Clock::now();
+  const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
+  if (o.verbose && o.quiet) throw UsageError("-v and -q exclude each other");
+  if (o.factor != 0 && !o.size.empty()) throw UsageError("give --factor or --size, not both");
+  std::pair<long, long> size{0, 0};
+  if (!o.size.empty()) size = parse_size(o.size);
+  const Kernel generator = [&] {
+    try {
+      return Kernel::parse(o.generator);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--generator: ") + e.what());
+    }
+  }();
+  Method method;
+  Boundary boundary;
+  std::optional<Display> display;
+  try {
+    method = parse_method(o.method);
+    boundary = parse_boundary(o.boundary);
+    if (!o.display.empty()) display = Display::parse(o.display);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  if (method == Method::MinError && !generator.is_bspline())
+    throw UsageError("--method min-error needs a B-spline generator (box, tent, quadratic, cubic, "
+                     "bspline:N), not " + generator.name() + "; use --method conventional");
+  if (o.nonfinite != "error" && o.nonfinite != "zero")
+    throw UsageError("--nonfinite '" + o.nonfinite + "': expected error or zero");
+  if (o.prefilter != "fft" && o.prefilter != "recursive")
+    throw UsageError("--prefilter '" + o.prefilter + "': expected fft or recursive");
+  if (same_file(o.input, o.output)) throw UsageError("-o " + o.output + " is the input file");
+  if (!o.coeffs.empty() && (same_file(o.input, o.coeffs) || same_file(o.output, o.coeffs)))
+    throw UsageError("--coeffs " + o.coeffs + " is the input or the output file");
+  for (const std::string& path : {o.output, o.coeffs}) {
+    if (path.empty()) continue;
+    const fs::path p(path);
+    const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec))
+      throw OutputError(path + ": output folder " + dir.string() + " does not exist");
+    if (!o.coeffs.empty() && path == o.coeffs && is_8bit_format(path))
+      throw UsageError("--coeffs " + path + ": coefficient files are float EXR");
+  }
+
+  ImageReader reader(o.input);
+  const long win = reader.width(), hin = reader.height();
+  const int C = reader.channels();
+  const std::vector<std::string> names = reader.channel_names();
+  auto out_size = [&](long w, long h) -> std::pair<long, long> {
+    if (size.first) return size;
+    if (o.factor == 0) return {w, h};
+    const long ow = std::lround(w / o.factor), oh = std::lround(h / o.factor);
+    if (ow < 1 || oh < 1) {
+      std::ostringstream m;
+      m << "--factor " << o.factor << " is larger than the image (" << w << " x " << h << ")";
+      throw UsageError(m.str());
+    }
+    return {ow, oh};
+  };
+
+  Coefficients k;
+  double t_acquire = 0, t_prefilter = 0;
+  long W, H;
+  if (is_coefficient_file(reader)) {
+    if (o.generator_given || o.method_given || o.boundary_given)
+      throw UsageError(o.input + " is a coefficient file: its generator, method and boundary "
+                       "are recorded in it; drop --generator, --method and --boundary");
+    const auto t = Clock::now();
+    k = read_coefficients(reader);
+    t_acquire = seconds_since(t);
+    std::tie(W, H) = out_size(k.c.width, k.c.height);
+  } else {
+    if (o.factor == 0 && !size.first)
+      throw UsageError("give the output size: --factor S (output = input / S) or --size WxH");
+    std::tie(W, H) = out_size(win, hin);
+    const AcquisitionPlan plan(win, hin, C, double(W), double(H), Lattice::cartesian(), generator,
+                               boundary, method);
+    Acquisition acquisition(plan, threads);
+    const long strip = reader.preferred_strip();
+    std::vector<float> rows(std::size_t(strip) * win * C);
+    long nonfinite = 0, first_x = -1, first_y = -1;
+    int first_c = -1;
+    {
+      Progress progress(!o.quiet, "reading and acquiring");
+      const auto t = Clock::now();
+      for (long y = 0; y < hin; y += strip) {
+        const long y1 = std::min(hin, y + strip);
+        reader.read_rows(y, y1, rows.data());
+        const std::size_t n = std::size_t(y1 - y) * win * C;
+        for (std::size_t q = 0; q < n; ++q)
+          if (!std::isfinite(rows[q])) {
+            if (nonfinite++ == 0) {
+              first_c = int(q % C);
+              first_x = long((q / C) % win);
+              first_y = y + long(q / (std::size_t(win) * C));
+            }
+            rows[q] = 0.0f;
+          }
+        if (nonfinite && o.nonfinite == "error") break;
+        acquisition.add_rows(y, y1, rows.data());
+        progress.update(double(y1) / hin);
+      }
+      t_acquire = seconds_since(t);
+    }
+    if (nonfinite) {
+      std::ostringstream m;
+      m << o.input << ": non-finite sample (NaN or Inf) at x " << first_x << ", y " << first_y
+        << ", channel " << (first_c < int(names.size()) ? names[first_c] : std::to_string(first_c));
+      if (o.nonfinite == "error") {
+        m << "; use --nonfinite zero to replace them with 0";
+        throw InputError(m.str());
+      }
+      if (!o.quiet) std::cerr << "siproject: warning: replaced " << nonfinite << " non-finite samples with 0; first: " << m.str() << "\n";
+    }
+    k = acquisition.finish();
+    const auto t = Clock::now();
+    prefilter(k, threads, o.prefilter == "fft" ? PrefilterMethod::FFT : PrefilterMethod::Recursive);
+    t_prefilter = seconds_since(t);
+    // Coefficients are kept in float, as a coefficient file stores them, so
+    // that evaluating a written coefficient file reproduces this run exactly.
+    for (double& v : k.c.data) v = static_cast<float>(v);
+  }
+
+  const Display shown = display ? *display : (k.min_error ? Display::antialiased_2x2() : Display::centred());
+  auto t = Clock::now();
+  const Image image = final_image(k, shown, W, H, threads);
+  const double t_resample = seconds_since(t);
+
+  const Metadata md = {
+      {"sis:method", k.min_error ? "min-error" : "conventional"},
+      {"sis:generator", k.generator.name()},
+      {"sis:display", shown.name()},
+      {"sis:boundary", boundary_name(k.boundary)},
+      {"sis:input", fs::path(o.input).filename().string()},
+      {"Software", "siproject"},
+  };
+  t = Clock::now();
+  if (!o.coeffs.empty()) write_coefficients(o.coeffs, k, names, {{"sis:input", md[4].second}});
+  write_image(o.output, image, names, md, reader.alpha_channel());
+  const double t_write = seconds_since(t);
+  if (o.verbose) {
+    std::fprintf(stderr,
+                 "siproject: %ld x %ld x %d -> %ld x %ld, %s %s, display %s, boundary %s, %d threads\n"
+                 "siproject: read+acquire %.3f s, prefilter %.3f s, resample %.3f s, write %.3f s, "
+                 "total %.3f s\n",
+                 win, hin, C, W, H, k.min_error ? "min-error" : "conventional",
+                 k.generator.name().c_str(), shown.name().c_str(), boundary_name(k.boundary).c_str(),
+                 threads, t_acquire, t_prefilter, t_resample, t_write, seconds_since(t_start));
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  CLI::App app{
+      "siproject: form a final image from a supersampled render by projection onto a\n"
+      "shift-invariant space of B-splines (min-error), or by a conventional filter.\n"
+      "IN is any image OpenImageIO reads (EXR above all), taken as point samples at\n"
+      "((i + 1/2) / S, (j + 1/2) / S) output pixels; every channel is processed as it\n"
+      "is (EXR alpha is premultiplied, so it is filtered with the colour). EXR output\n"
+      "is float with the method in its metadata; PNG, JPEG and TIFF are written 8-bit,\n"
+      "sRGB-encoded and clamped to [0, 1]. If IN is a coefficient file (--coeffs), the\n"
+      "stored approximation is evaluated instead: at its own size, --size or --factor,\n"
+      "with any --display.\n"
+      "Exit status: 0 success, 2 usage, 3 input, 4 output.",
+      "siproject"};
+  app.add_option("IN", o.input, "input image, or a coefficient file written by --coeffs")->required();
+  app.add_option("-o,--output", o.output, "output image (.exr float; .png/.jpg/.tif 8-bit sRGB)")->required();
+  app.add_option("--factor", o.factor, "supersampling factor per axis: output = input / S (any real S > 0)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--size", o.size, "output size WxH (any ratio to the input)");
+  auto* g = app.add_option("--generator", o.generator,
+                           "box, tent, quadratic, cubic, bspline:N (N = 0..7), mitchell, gaussian, "
+                           "catmull-rom, lanczos3")->capture_default_str();
+  auto* m = app.add_option("--method", o.method,
+                           "min-error (orthogonal projection, B-spline generators) or conventional "
+                           "(normalised weighted average, any generator)")->capture_default_str();
+  app.add_option("--display", o.display,
+                 "how the continuous approximation is sampled: centred, 2x2 (off-centre "
+                 "antialiasing at +-1/4), pixel (exact pixel average) or offsets:DX,DY;DX,DY;... "
+                 "[default: 2x2 for min-error, centred (the filtered pixels) for conventional]");
+  auto* b = app.add_option("--boundary", o.boundary,
+                           "mirror (half-sample symmetric) or periodic")->capture_default_str();
+  app.add_option("--coeffs", o.coeffs, "also write the coefficients as a float EXR with their metadata");
+  app.add_option("--nonfinite", o.nonfinite,
+                 "NaN/Inf samples: error, or zero to replace them with 0")->capture_default_str();
+  app.add_option("--prefilter", o.prefilter, "fft or recursive (same result to rounding)")->capture_default_str();
+  app.add_option("--threads", o.threads, "worker threads (0: all cores); output is bit-identical for any N")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  app.add_flag("-v,--verbose", o.verbose, "print sizes and the time of each stage");
+  app.add_flag("-q,--quiet", o.quiet, "print nothing but errors");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "siproject: " << e.what() << "\n(run siproject --help for the options)\n";
+    return kExitUsage;
+  }
+  o.generator_given = g->count() > 0;
+  o.method_given = m->count() > 0;
+  o.boundary_given = b->count() > 0;
+  // A conventional filter named alone means the conventional method.
+  if (o.generator_given && !o.method_given) {
+    try {
+      if (!Kernel::parse(o.generator).is_bspline()) o.method = "conventional";
+    } catch (const std::invalid_argument&) {  // reported by run()
+    }
+  }
+  try {
+    return run(o);
+  } catch (const UsageError& e) {
+    std::cerr << "siproject: " << e.what() << "\n";
+    return kExitUsage;
+  } catch (const InputError& e) {
+    std::cerr << "siproject: " << e.what() << "\n";
+    return kExitInput;
+  } catch (const OutputError& e) {
+    std::cerr << "siproject: " << e.what() << "\n";
+    return kExitOutput;
+  } catch (const std::exception& e) {
+    std::cerr << "siproject: " << e.what() << "\n";
+    return 1;
+  }
+}
