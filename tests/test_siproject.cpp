@@ -1,0 +1,241 @@
+// siproject end to end, through the built binary, on inputs the tests write.
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+#include <stdlib.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "sis/imageio.h"
+#include "sis/projection.h"
+
+namespace fs = std::filesystem;
+using namespace sis;
+
+#ifndef SIPROJECT
+#error "SIPROJECT must name the siproject binary"
+#endif
+
+namespace {
+
+struct Result {
+  int status;
+  std::string output;  // stdout and stderr
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(SIPROJECT) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  std::size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+  const int st = pclose(p);
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+
+class Siproject : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char tmpl[] = "/tmp/siproject-test-XXXXXX";
+    dir_ = mkdtemp(tmpl);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (fs::path(dir_) / name).string(); }
+  std::vector<std::string> files() const {
+    std::vector<std::string> v;
+    for (const auto& e : fs::directory_iterator(dir_)) v.push_back(e.path().filename().string());
+    std::sort(v.begin(), v.end());
+    return v;
+  }
+  std::string dir_;
+};
+
+Image random_image(long w, long h, int c, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0, 1);
+  Image img(w, h, c);
+  for (float& v : img.data) v = u(rng);
+  return img;
+}
+
+void write_half(const std::string& path, const Image& img) {
+  OIIO::ImageSpec spec(int(img.width), int(img.height), img.channels, OIIO::TypeDesc::HALF);
+  auto out = OIIO::ImageOutput::create(path);
+  ASSERT_TRUE(out && out->open(path, spec) &&
+              out->write_image(OIIO::TypeDesc::FLOAT, img.data.data()) && out->close());
+}
+
+}  // namespace
+
+TEST_F(Siproject, AgreesWithTheLibrary) {
+  const Image in = random_image(64, 48, 3, 1);
+  write_image(path("in.exr"), in);
+  for (const std::string g : {"cubic", "tent", "box"}) {
+    for (const std::string d : {"centred", "2x2", "pixel"}) {
+      const Result r = run(path("in.exr") + " -o " + path("out.exr") + " --factor 4 -q --generator " + g +
+                           " --display " + d);
+      ASSERT_EQ(r.status, 0) << r.output;
+      const Image got = read_image(path("out.exr"));
+      ProjectionOptions o;
+      o.generator = Kernel::parse(g);
+      Coefficients k = project(in, 16, 12, o);
+      for (double& v : k.c.data) v = static_cast<float>(v);  // as the tool keeps them
+      const Image ref = final_image(k, Display::parse(d), 16, 12);
+      ASSERT_EQ(got.width, 16);
+      ASSERT_EQ(got.height, 12);
+      for (std::size_t q = 0; q < ref.data.size(); ++q) EXPECT_EQ(got.data[q], ref.data[q]) << g << " " << d;
+    }
+  }
+  const Result r = run(path("in.exr") + " -o " + path("m.exr") + " --factor 4 -q --generator mitchell");
+  ASSERT_EQ(r.status, 0) << r.output;  // a conventional filter alone implies --method conventional
+  ProjectionOptions o;
+  o.generator = Kernel::mitchell();
+  o.method = Method::Conventional;
+  const Coefficients k = project(in, 16, 12, o);
+  const Image got = read_image(path("m.exr"));
+  for (std::size_t q = 0; q < got.data.size(); ++q) EXPECT_EQ(got.data[q], static_cast<float>(k.c.data[q]));
+}
+
+TEST_F(Siproject, CoefficientRoundTripEqualsDirectResult) {
+  write_image(path("in.exr"), random_image(90, 60, 3, 2));
+  for (const std::string extra : {"", "--display pixel", "--display centred"}) {
+    ASSERT_EQ(run(path("in.exr") + " -o " + path("direct.exr") + " --factor 3 -q --coeffs " +
+                  path("c.exr") + " " + extra).status, 0);
+    const Result r = run(path("c.exr") + " -o " + path("rt.exr") + " -q " + extra);
+    ASSERT_EQ(r.status, 0) << r.output;
+    const Image a = read_image(path("direct.exr")), b = read_image(path("rt.exr"));
+    EXPECT_EQ(a.width, b.width);
+    EXPECT_EQ(a.data, b.data) << extra;
+  }
+  // At another size: the stored approximation sampled there.
+  ProjectionOptions o;
+  Coefficients k = project(read_image(path("in.exr")), 30, 20, o);
+  for (double& v : k.c.data) v = static_cast<float>(v);
+  for (const std::string d : {"2x2", "pixel"}) {
+    ASSERT_EQ(run(path("c.exr") + " -o " + path("rt.exr") + " -q --size 41x17 --display " + d).status, 0);
+    EXPECT_EQ(read_image(path("rt.exr")).data, resample(k, Display::parse(d), 41, 17).data) << d;
+  }
+  ImageReader c(path("c.exr"));
+  EXPECT_EQ(c.attribute("sis:generator"), "cubic");
+  EXPECT_EQ(c.attribute("sis:boundary"), "mirror");
+  EXPECT_EQ(c.attribute("sis:method"), "min-error");
+  EXPECT_EQ(c.attribute("sis:lattice"), "cartesian");
+  EXPECT_EQ(c.width(), 30);
+  // the recorded options cannot be overridden
+  EXPECT_EQ(run(path("c.exr") + " -o " + path("x.exr") + " --generator tent").status, 2);
+}
+
+TEST_F(Siproject, EveryChannelCountAndHalfInput) {
+  for (int channels : {1, 2, 4, 5}) {
+    const Image in = random_image(40, 40, channels, channels);
+    write_half(path("in.exr"), in);
+    const Result r = run(path("in.exr") + " -o " + path("out.exr") + " --factor 2 -q");
+    ASSERT_EQ(r.status, 0) << r.output;
+    ImageReader out(path("out.exr"));
+    EXPECT_EQ(out.channels(), channels);
+    EXPECT_EQ(out.width(), 20);
+    EXPECT_EQ(out.attribute("sis:method"), "min-error");
+    EXPECT_EQ(out.attribute("sis:display"), "2x2");
+    // half input read into float: equals projecting the half-rounded samples
+    const Image half = read_image(path("in.exr"));
+    ProjectionOptions o;
+    Coefficients k = project(half, 20, 20, o);
+    for (double& v : k.c.data) v = static_cast<float>(v);
+    const Image ref = final_image(k, Display::antialiased_2x2(), 20, 20);
+    EXPECT_EQ(read_image(path("out.exr")).data, ref.data);
+  }
+}
+
+TEST_F(Siproject, BitIdenticalForAnyThreadCount) {
+  write_image(path("in.exr"), random_image(301, 203, 3, 3));
+  std::vector<float> first;
+  for (int t : {1, 2, 3}) {
+    ASSERT_EQ(run(path("in.exr") + " -o " + path("out.exr") + " --size 97x61 -q --threads " +
+                  std::to_string(t)).status, 0);
+    const Image img = read_image(path("out.exr"));
+    if (first.empty()) first = img.data;
+    EXPECT_EQ(img.data, first) << t << " threads";
+  }
+}
+
+TEST_F(Siproject, EightBitOutputIsSrgbClamped) {
+  Image in(8, 8, 3);
+  for (long y = 0; y < 8; ++y)
+    for (long x = 0; x < 8; ++x) {
+      in.at(x, y, 0) = 0.5f;   // sRGB 0.7354 -> 188
+      in.at(x, y, 1) = 3.0f;   // clamped -> 255
+      in.at(x, y, 2) = -1.0f;  // clamped -> 0
+    }
+  write_image(path("in.exr"), in);
+  ASSERT_EQ(run(path("in.exr") + " -o " + path("out.png") + " --factor 2 -q --generator box").status, 0);
+  auto png = OIIO::ImageInput::open(path("out.png"));
+  ASSERT_TRUE(png);
+  std::vector<unsigned char> px(4 * 4 * 3);
+  ASSERT_TRUE(png->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, px.data()));
+  EXPECT_EQ(px[0], 188);
+  EXPECT_EQ(px[1], 255);
+  EXPECT_EQ(px[2], 0);
+}
+
+TEST_F(Siproject, NonFiniteSamplesAreAnErrorUnlessReplaced) {
+  Image in = random_image(16, 16, 3, 4);
+  in.at(5, 7, 1) = std::numeric_limits<float>::infinity();
+  in.at(9, 9, 0) = std::nanf("");
+  write_image(path("in.exr"), in);
+  Result r = run(path("in.exr") + " -o " + path("out.exr") + " --factor 2");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.output.find("non-finite"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("x 5, y 7"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("out.exr")));
+  r = run(path("in.exr") + " -o " + path("out.exr") + " --factor 2 --nonfinite zero");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("replaced 2 non-finite"), std::string::npos) << r.output;
+  for (float v : read_image(path("out.exr")).data) EXPECT_TRUE(std::isfinite(v));
+}
+
+TEST_F(Siproject, BadInputGetsAClearErrorAndLosesNothing) {
+  write_image(path("in.exr"), random_image(32, 32, 3, 5));
+  { std::ofstream(path("text.exr")) << "this is not an image\n"; }
+  { std::ofstream(path("empty.exr")); }
+  {  // a truncated EXR: the header survives, the pixels do not
+    write_image(path("big.exr"), random_image(256, 256, 3, 6));
+    fs::resize_file(path("big.exr"), fs::file_size(path("big.exr")) / 2);
+  }
+  const auto before = files();
+  struct Case {
+    std::string args;
+    int status;
+    std::string says;
+  };
+  const std::string in = path("in.exr"), out = " -o " + path("out.exr");
+  const Case cases[] = {
+      {path("missing.exr") + out + " --factor 2", 3, "missing.exr: no such file"},
+      {path("big.exr") + out + " --factor 2", 3, "big.exr"},
+      {path("text.exr") + out + " --factor 2", 3, "text.exr"},
+      {path("empty.exr") + out + " --factor 2", 3, "empty.exr"},
+      {in + out + " --factor 100", 2, "--factor 100 is larger than the image"},
+      {in + out + " --factor 2 --generator sinc", 2, "unknown generator 'sinc'"},
+      {in + out + " --factor 2 --generator mitchell --method min-error", 2, "needs a B-spline generator"},
+      {in + out + " --size 10by10", 2, "--size '10by10'"},
+      {in + out + " --size 0x10", 2, "--size '0x10'"},
+      {in + out + " --factor 2 --display 3x3", 2, "unknown display '3x3'"},
+      {in + out + " --factor 2 --display offsets:0.1", 2, "offset '0.1'"},
+      {in + " -o " + path("nowhere/out.exr") + " --factor 2", 4, "does not exist"},
+      {in + " -o " + in + " --factor 2", 2, "is the input file"},
+      {in + out, 2, "give the output size"},
+      {in + out + " --factor 2 --boundary clamp", 2, "unknown boundary rule 'clamp'"},
+      {in + out + " --factor -2", 2, "--factor"},
+  };
+  for (const Case& c : cases) {
+    const Result r = run(c.args);
+    EXPECT_EQ(r.status, c.status) << c.args << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.says), std::string::npos) << c.args << "\n" << r.output;
+    EXPECT_EQ(files(), before) << "left a file behind: " << c.args;
+  }
+}
