@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -163,27 +164,38 @@ int run(const Options& o) {
                                boundary, method);
     Acquisition acquisition(plan, threads);
     const long strip = reader.preferred_strip();
-    std::vector<float> rows(std::size_t(strip) * win * C);
+    // Two strip buffers: the next strip is decoded while this one is acquired.
+    std::vector<float> rows[2] = {std::vector<float>(std::size_t(strip) * win * C),
+                                  std::vector<float>(std::size_t(strip) * win * C)};
     long nonfinite = 0, first_x = -1, first_y = -1;
     int first_c = -1;
     {
       Progress progress(!o.quiet, "reading and acquiring");
       const auto t = Clock::now();
-      for (long y = 0; y < hin; y += strip) {
+      auto read = [&](long y, int b) {
+        reader.read_rows(y, std::min(hin, y + strip), rows[b].data());
+      };
+      std::future<void> next = std::async(std::launch::async, read, 0L, 0);
+      for (long y = 0, b = 0; y < hin; y += strip, b ^= 1) {
         const long y1 = std::min(hin, y + strip);
-        reader.read_rows(y, y1, rows.data());
+        next.get();  // rethrows a read error
+        if (y1 < hin) next = std::async(std::launch::async, read, y1, int(b ^ 1));
+        float* data = rows[b].data();
         const std::size_t n = std::size_t(y1 - y) * win * C;
         for (std::size_t q = 0; q < n; ++q)
-          if (!std::isfinite(rows[q])) {
+          if (!std::isfinite(data[q])) {
             if (nonfinite++ == 0) {
               first_c = int(q % C);
               first_x = long((q / C) % win);
               first_y = y + long(q / (std::size_t(win) * C));
             }
-            rows[q] = 0.0f;
+            data[q] = 0.0f;
           }
-        if (nonfinite && o.nonfinite == "error") break;
-        acquisition.add_rows(y, y1, rows.data());
+        if (nonfinite && o.nonfinite == "error") {
+          if (next.valid()) next.wait();
+          break;
+        }
+        acquisition.add_rows(y, y1, data);
         progress.update(double(y1) / hin);
       }
       t_acquire = seconds_since(t);
