@@ -16,6 +16,7 @@
 
 #include "sis/imageio.h"
 #include "sis/projection.h"
+#include "sis/range.h"
 
 namespace fs = std::filesystem;
 using namespace sis;
@@ -33,7 +34,8 @@ struct Options {
   double factor = 0;
   std::string size;
   std::string generator = "cubic", method = "min-error", display, boundary = "mirror";
-  std::string nonfinite = "error", prefilter = "fft";
+  std::string nonfinite = "error", prefilter = "fft", clamp = "none";
+  bool highlight_compress = false;
   int threads = 0;
   bool verbose = false, quiet = false;
   bool generator_given = false, method_given = false, boundary_given = false;
@@ -111,6 +113,12 @@ int run(const Options& o) {
   if (method == Method::MinError && !generator.is_bspline())
     throw UsageError("--method min-error needs a B-spline generator (box, tent, quadratic, cubic, "
                      "bspline:N), not " + generator.name() + "; use --method conventional");
+  Clamp clamp;
+  try {
+    clamp = parse_clamp(o.clamp);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--clamp: ") + e.what());
+  }
   if (o.nonfinite != "error" && o.nonfinite != "zero")
     throw UsageError("--nonfinite '" + o.nonfinite + "': expected error or zero");
   if (o.prefilter != "fft" && o.prefilter != "recursive")
@@ -148,10 +156,21 @@ int run(const Options& o) {
   Coefficients k;
   double t_acquire = 0, t_prefilter = 0;
   long W, H;
+  bool compressed = o.highlight_compress;
+  std::unique_ptr<LocalRange> local;
+  const int alpha = reader.alpha_channel();
+  auto for_colour = [&](float* data, std::size_t n, double (*f)(double)) {
+    for (std::size_t q = 0; q < n; ++q)
+      if (int(q % C) != alpha) data[q] = static_cast<float>(f(data[q]));
+  };
   if (is_coefficient_file(reader)) {
-    if (o.generator_given || o.method_given || o.boundary_given)
-      throw UsageError(o.input + " is a coefficient file: its generator, method and boundary "
-                       "are recorded in it; drop --generator, --method and --boundary");
+    if (o.generator_given || o.method_given || o.boundary_given || o.highlight_compress)
+      throw UsageError(o.input + " is a coefficient file: its generator, method, boundary and "
+                       "highlight compression are recorded in it; drop --generator, --method, "
+                       "--boundary and --highlight-compress");
+    if (clamp == Clamp::Local)
+      throw UsageError("--clamp local needs the input samples; " + o.input + " is a coefficient file");
+    compressed = reader.attribute("sis:highlight_compress") == "1";
     const auto t = Clock::now();
     k = read_coefficients(reader);
     t_acquire = seconds_since(t);
@@ -163,6 +182,7 @@ int run(const Options& o) {
     const AcquisitionPlan plan(win, hin, C, double(W), double(H), Lattice::cartesian(), generator,
                                boundary, method);
     Acquisition acquisition(plan, threads);
+    local = std::make_unique<LocalRange>(win, hin, C, W, H);
     const long strip = reader.preferred_strip();
     // Two strip buffers: the next strip is decoded while this one is acquired.
     std::vector<float> rows[2] = {std::vector<float>(std::size_t(strip) * win * C),
@@ -195,6 +215,8 @@ int run(const Options& o) {
           if (next.valid()) next.wait();
           break;
         }
+        local->add_rows(y, y1, data);
+        if (compressed) for_colour(data, n, highlight_compress);
         acquisition.add_rows(y, y1, data);
         progress.update(double(y1) / hin);
       }
@@ -221,7 +243,12 @@ int run(const Options& o) {
 
   const Display shown = display ? *display : (k.min_error ? Display::antialiased_2x2() : Display::centred());
   auto t = Clock::now();
-  const Image image = final_image(k, shown, W, H, threads);
+  Image image = final_image(k, shown, W, H, threads);
+  if (compressed) for_colour(image.data.data(), image.data.size(), highlight_expand);
+  const bool own_range = local && local->min().width == W && local->min().height == H;
+  const RangeReport before = report_range(image, own_range ? local.get() : nullptr);
+  apply_clamp(image, clamp, local.get());
+  const RangeReport after = report_range(image, nullptr);
   const double t_resample = seconds_since(t);
 
   const Metadata md = {
@@ -230,10 +257,20 @@ int run(const Options& o) {
       {"sis:display", shown.name()},
       {"sis:boundary", boundary_name(k.boundary)},
       {"sis:input", fs::path(o.input).filename().string()},
+      {"sis:highlight_compress", compressed ? "1" : "0"},
+      {"sis:clamp", clamp_name(clamp)},
+      {"sis:output_min", std::to_string(after.min)},
+      {"sis:output_max", std::to_string(after.max)},
+      {"sis:negative_before_clamp", std::to_string(before.negative)},
+      {"sis:out_of_range_before_clamp",
+       own_range ? std::to_string(before.out_of_range) : std::string("unknown")},
       {"Software", "siproject"},
   };
   t = Clock::now();
-  if (!o.coeffs.empty()) write_coefficients(o.coeffs, k, names, {{"sis:input", md[4].second}});
+  if (!o.coeffs.empty())
+    write_coefficients(o.coeffs, k, names,
+                       {{"sis:input", fs::path(o.input).filename().string()},
+                        {"sis:highlight_compress", compressed ? "1" : "0"}});
   write_image(o.output, image, names, md, reader.alpha_channel());
   const double t_write = seconds_since(t);
   if (o.verbose) {
@@ -244,6 +281,15 @@ int run(const Options& o) {
                  win, hin, C, W, H, k.min_error ? "min-error" : "conventional",
                  k.generator.name().c_str(), shown.name().c_str(), boundary_name(k.boundary).c_str(),
                  threads, t_acquire, t_prefilter, t_resample, t_write, seconds_since(t_start));
+    std::fprintf(stderr, "siproject: output range [%g, %g], %ld negative samples", before.min,
+                 before.max, before.negative);
+    if (own_range)
+      std::fprintf(stderr, ", %ld of %ld outside the input range under their pixel",
+                   before.out_of_range, before.samples);
+    std::fprintf(stderr, "%s\n", compressed ? " (highlight compression on)" : "");
+    if (clamp != Clamp::None)
+      std::fprintf(stderr, "siproject: after --clamp %s: range [%g, %g]\n", clamp_name(clamp).c_str(),
+                   after.min, after.max);
   }
   return 0;
 }
@@ -284,6 +330,12 @@ int main(int argc, char** argv) {
   app.add_option("--coeffs", o.coeffs, "also write the coefficients as a float EXR with their metadata");
   app.add_option("--nonfinite", o.nonfinite,
                  "NaN/Inf samples: error, or zero to replace them with 0")->capture_default_str();
+  app.add_flag("--highlight-compress", o.highlight_compress,
+               "compress the samples' range with OpenImageIO's log curve (identity below 0.18) "
+               "before projecting, expand after: far less HDR ringing, at a cost in energy");
+  app.add_option("--clamp", o.clamp,
+                 "clamp displayed samples: none, zero (at 0), local (to the min/max of the input "
+                 "samples under each output pixel)")->capture_default_str();
   app.add_option("--prefilter", o.prefilter, "fft or recursive (same result to rounding)")->capture_default_str();
   app.add_option("--threads", o.threads, "worker threads (0: all cores); output is bit-identical for any N")
       ->check(CLI::NonNegativeNumber)->capture_default_str();

@@ -6,16 +6,20 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "fftw_planner.h"
 #include "sis/weights.h"
 
 namespace sis {
 
-namespace {
-constexpr double kPi = 3.14159265358979323846;
-std::mutex& planner_mutex() {  // the FFTW planner is not thread-safe
+namespace detail {
+std::mutex& fftw_planner_mutex() {
   static std::mutex m;
   return m;
 }
+}  // namespace detail
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
 }  // namespace
 
 FftwBuffer::FftwBuffer(long n) : data(fftw_alloc_real(std::max(1L, n))) {
@@ -40,7 +44,7 @@ PrefilterPlan1D::PrefilterPlan1D(int degree, long n, Boundary boundary, Prefilte
       divisor_[k] = double(n) * bspline_autocorrelation_spectrum(degree, 2 * kPi * std::min(k, n - k) / n);
   }
   FftwBuffer buf(n);
-  std::lock_guard<std::mutex> lock(planner_mutex());
+  std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
   const int len = static_cast<int>(n);
   const bool mirror = boundary == Boundary::Mirror;
   forward_ = fftw_plan_r2r_1d(len, buf.data, buf.data, mirror ? FFTW_REDFT10 : FFTW_R2HC,
@@ -51,7 +55,7 @@ PrefilterPlan1D::PrefilterPlan1D(int degree, long n, Boundary boundary, Prefilte
 }
 
 PrefilterPlan1D::~PrefilterPlan1D() {
-  std::lock_guard<std::mutex> lock(planner_mutex());
+  std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
   if (forward_) fftw_destroy_plan(static_cast<fftw_plan>(forward_));
   if (backward_) fftw_destroy_plan(static_cast<fftw_plan>(backward_));
 }

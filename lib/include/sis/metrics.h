@@ -1,0 +1,92 @@
+#pragma once
+// Measures of a result (DESIGN.md section 8): high-pass energy share,
+// differences against a reference, the continuous L2 error of an
+// approximation, and overshoot of the input's local range. Sums run in
+// double precision. Units are output pixels; pixel (i, j) covers
+// [i, i+1) x [j, j+1) and its centre is (i + 1/2, j + 1/2).
+#include <functional>
+#include <vector>
+
+#include "sis/image.h"
+
+namespace sis {
+
+// Luminance of every pixel, one channel: Rec. 709 weights
+// 0.2126 R + 0.7152 G + 0.0722 B of the first three channels when there are
+// three or more (linear RGB; further channels such as alpha are ignored);
+// channel 0 itself for one or two channels (grey, grey + alpha).
+Grid<double> luminance(const Image& image);
+
+// Share in [0, 1] of the luminance's DFT energy sum |F(k)|^2 at radial
+// frequency sqrt(fx^2 + fy^2) strictly greater than the cutoff (cycles per
+// pixel; fx = kx / W with kx folded into [-W/2, W/2], likewise fy), so a
+// component exactly at the cutoff counts as low-pass. The mean is removed:
+// the DC term is left out of both sums. 0 for a constant image. The DFT is
+// periodic: the image's edges meet, and a jump between them adds high-pass
+// energy. Cutoffs must be finite and >= 0, and so must every luminance
+// value (throws std::invalid_argument otherwise); one DFT serves every cutoff.
+std::vector<double> highpass_energy_shares(const Image& image, const std::vector<double>& cutoffs);
+double highpass_energy_share(const Image& image, double cutoff_cycles_per_pixel);
+
+// RMS over every channel of a - b, leaving out a band of `border` pixels
+// along each edge. The images must have equal sizes and channel counts.
+double rms_difference(const Image& a, const Image& b, long border = 0);
+
+// 20 log10(peak / rms_difference(a, b, border)) in dB; +infinity when the
+// images are equal inside the border.
+double psnr(const Image& a, const Image& b, double peak = 1.0, long border = 0);
+
+// Continuous L2 error of f_app against a reference render f of the same
+// image_width x image_height frame at a much higher factor: f's sample (i, j)
+// sits at ((i + 1/2) image_width / ref_w, (j + 1/2) image_height / ref_h),
+// and f_app is evaluated exactly there (resample() with the centred display;
+// the values pass through float, a relative rounding of about 6e-8). Returns
+// sqrt(mean of (f_app - f)^2) over every channel and every sample whose
+// position lies in [border, image_width - border] x [border, image_height -
+// border], the RMS estimate of the normalised L2 norm of f_app - f.
+double l2_error(const Coefficients& coefficients, const Image& reference,
+                double border_output_pixels = 0, int threads = 1);
+
+// The same against a closed-form truth f(x, y, channel) (output-pixel
+// coordinates), on a grid of samples_per_pixel x samples_per_pixel points per
+// output pixel placed as the reference samples above. truth is called from
+// the calling thread only.
+double l2_error(const Coefficients& coefficients,
+                const std::function<double(double x, double y, int channel)>& truth,
+                int samples_per_pixel, double border_output_pixels = 0, int threads = 1);
+
+struct OvershootOptions {
+  // The input samples "under" output pixel (i, j) are those whose position
+  // falls in [i - r, i + 1 + r) x [j - r, j + 1 + r), r = neighbourhood in
+  // output pixels. The default r = 1 (the 3 x 3 block of output pixels)
+  // covers the tent's support and the main lobe of wider kernels, as a local
+  // min/max clamp would. When no sample falls there (an output finer than
+  // the input and a small r), the nearest sample is used.
+  double neighbourhood = 1.0;
+  // A value is out of range (or negative) when it passes its bound by more
+  // than tolerance * max(1, |bound|): float rounding of a reproduced flat
+  // area is not overshoot. The reported extremes use no tolerance.
+  double tolerance = 1e-6;
+  // Output pixels within this many pixels of an edge are left out.
+  long border = 0;
+};
+
+struct OvershootReport {
+  double max_overshoot = 0;   // max of output - local max, over pixels and channels; >= 0
+  double max_undershoot = 0;  // max of local min - output; >= 0
+  long pixels = 0;            // output pixels measured (inside the border)
+  long pixels_out_of_range = 0;  // pixels with some channel outside [local min, local max]
+  long negative_pixels = 0;      // pixels with some channel below 0
+  double negative_energy = 0;    // sum over pixels and channels of min(v, 0)^2
+  double min = 0, max = 0;       // extremes of the measured output values
+};
+
+// How far an output leaves the range of the input samples under it
+// (DESIGN.md sections 6 and 8), channel by channel. Output and input cover
+// the same frame: input sample (k, l) sits at ((k + 1/2) W / W_in,
+// (l + 1/2) H / H_in) in the output's pixels, any ratio per axis. The
+// channel counts must match.
+OvershootReport overshoot(const Image& output, const Image& input,
+                          const OvershootOptions& options = {});
+
+}  // namespace sis

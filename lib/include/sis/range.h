@@ -1,0 +1,66 @@
+#pragma once
+// Range control, opt-in remedies for what the orthogonal projection does to
+// the range of an image (DESIGN.md section 6), each reported, never hidden:
+// - highlight compression: OpenImageIO's odd-symmetric log curve (identity
+//   below 0.18) applied to the samples before projecting, inverted after;
+// - clamps of the displayed samples: at zero, or to the min/max of the input
+//   samples under each output pixel (the local input range).
+#include <string>
+#include <vector>
+
+#include "sis/image.h"
+#include "sis/resample.h"
+
+namespace sis {
+
+// OpenImageIO's rangecompress / rangeexpand (SPI curve), in double.
+double highlight_compress(double x);
+double highlight_expand(double y);
+
+enum class Clamp { None, Zero, Local };
+Clamp parse_clamp(const std::string& spelling);  // none | zero | local
+std::string clamp_name(Clamp c);
+
+// Min and max of the input samples whose positions fall in each output pixel
+// (of a W x H image over win x hin samples). Per axis: the samples inside
+// the pixel's interval or, when there are none (upsampling), the one nearest
+// to its centre. Rows stream in order.
+class LocalRange {
+ public:
+  LocalRange(long input_width, long input_height, int channels, long width, long height);
+  void add_rows(long y0, long y1, const float* rows);
+  const Image& min() const { return min_; }
+  const Image& max() const { return max_; }
+
+ private:
+  std::vector<long> x_begin_, x_end_, y_begin_, y_end_;  // sample index ranges per pixel
+  long win_;
+  int channels_;
+  Image min_, max_;
+};
+
+// What the displayed samples do with the range, before any clamp.
+struct RangeReport {
+  double min = 0, max = 0;  // of the displayed samples
+  long negative = 0;        // samples below zero
+  long out_of_range = 0;    // samples outside the local input range (beyond 1e-5 of its scale)
+  long samples = 0;
+};
+
+// Reports on `image` against the local input range (which may be empty: then
+// out_of_range is not counted).
+RangeReport report_range(const Image& image, const LocalRange* local);
+
+// Overshoot and undershoot of the displayed min-error approximation of a
+// unit step (0 left, 1 right, edge on a pixel boundary), computed exactly
+// from the generator: inner products from the B-spline's cumulative
+// integral, the prefilter, the display. {max - 1, -min}.
+struct StepResponse {
+  double overshoot = 0, undershoot = 0;
+};
+StepResponse step_response(int degree, const Display& display);
+
+// Applies a clamp in place (`local` is needed for Clamp::Local).
+void apply_clamp(Image& image, Clamp clamp, const LocalRange* local);
+
+}  // namespace sis

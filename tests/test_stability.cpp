@@ -1,0 +1,179 @@
+// Where the method fails, measured (DESIGN.md section 6): noise gain against
+// theory, the step response's overshoot, and the range remedies.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "sis/projection.h"
+#include "sis/range.h"
+
+using namespace sis;
+
+namespace {
+const double kPi = std::acos(-1.0);
+
+// (1/pi) integral_0^pi g(w) dw by the midpoint rule (g smooth and periodic:
+// spectrally accurate).
+template <class G>
+double mean_over_period(G g) {
+  const int n = 4096;
+  double s = 0;
+  for (int i = 0; i < n; ++i) s += g((i + 0.5) * kPi / n);
+  return s / n;
+}
+}  // namespace
+
+TEST(HighlightCompression, IsOpenImageIOsCurveAndInvertible) {
+  for (double x : {0.0, 0.05, -0.1, 0.18, -0.18}) EXPECT_EQ(highlight_compress(x), x);
+  EXPECT_NEAR(highlight_compress(0.18 + 1e-9), 0.18, 1e-6);  // continuous at the knee
+  double prev = -1e9;
+  for (double x = -1000; x <= 1000; x += 0.37) {
+    const double y = highlight_compress(x);
+    EXPECT_GT(y, prev);  // monotone
+    prev = y;
+    EXPECT_EQ(highlight_compress(-x), -y);
+    EXPECT_NEAR(highlight_expand(y), x, 1e-12 * std::max(1.0, std::abs(x)));
+  }
+  EXPECT_LT(highlight_compress(100.0), 2.0);  // 100 maps below 2
+}
+
+TEST(LocalRange, MatchesBruteForceAtAnyRatio) {
+  for (auto [win, hin, W, H] : {std::array<long, 4>{37, 23, 10, 6}, {8, 8, 20, 13}, {40, 40, 10, 10}}) {
+    std::mt19937 rng(win);
+    std::uniform_real_distribution<float> u(-1, 1);
+    Image in(win, hin, 2);
+    for (float& v : in.data) v = u(rng);
+    LocalRange lr(win, hin, 2, W, H);
+    for (long y = 0; y < hin; y += 5) lr.add_rows(y, std::min(hin, y + 5), in.row(y));
+    // per axis: the samples inside the pixel's interval, or the nearest one
+    auto inside = [](long i, long samples, long count, long p) {
+      const double x = (i + 0.5) * count / samples;
+      bool any = false;
+      for (long k = 0; k < samples; ++k) {
+        const double xk = (k + 0.5) * count / samples;
+        any = any || (xk >= p && xk < p + 1);
+      }
+      if (any) return x >= p && x < p + 1;
+      long best = 0;
+      for (long k = 1; k < samples; ++k)
+        if (std::abs((k + 0.5) * count / samples - p - 0.5) <= std::abs((best + 0.5) * count / samples - p - 0.5))  // ties: the later
+          best = k;
+      return i == best;
+    };
+    for (long m = 0; m < H; ++m)
+      for (long n = 0; n < W; ++n)
+        for (int c = 0; c < 2; ++c) {
+          float lo = 1e9f, hi = -1e9f;
+          for (long j = 0; j < hin; ++j)
+            for (long i = 0; i < win; ++i)
+              if (inside(i, win, W, n) && inside(j, hin, H, m)) {
+                lo = std::min(lo, in.at(i, j, c));
+                hi = std::max(hi, in.at(i, j, c));
+              }
+          EXPECT_EQ(lr.min().at(n, m, c), lo) << win << " " << W;
+          EXPECT_EQ(lr.max().at(n, m, c), hi) << win << " " << W;
+        }
+  }
+}
+
+TEST(Noise, GainMatchesTheory) {
+  // Seeded white noise of variance sigma^2 on the samples of a constant
+  // image. Gains are relative to sigma^2 / s^2, the variance of a box
+  // average of the s^2 samples of a pixel. Theory (DESIGN.md section 6), per
+  // axis, squared for 2-D: min-error coefficients a^{-1}[0] = mean(1/A_d);
+  // centred display mean(B_d^2 / A_d) with B_d the display taps' transform;
+  // conventional tent (integral tent^2) / (integral tent)^2 = 2/3.
+  const long N = 160, s = 4;
+  const double sigma = 0.1;
+  std::mt19937 rng(2026);
+  std::normal_distribution<float> noise(0, float(sigma));
+  Image in(N * s, N * s, 1);
+  for (float& v : in.data) v = 0.5f + noise(rng);
+  auto variance = [](const std::vector<double>& v) {
+    double m = 0, q = 0;
+    for (double x : v) m += x;
+    m /= v.size();
+    for (double x : v) q += (x - m) * (x - m);
+    return q / (v.size() - 1);
+  };
+  const double unit = sigma * sigma / (s * s);
+  for (int d : {1, 3}) {
+    ProjectionOptions o;
+    o.generator = Kernel::bspline(d);
+    o.boundary = Boundary::Periodic;
+    const Coefficients k = project(in, N, N, o);
+    const double coef_theory = std::pow(mean_over_period([&](double w) {
+      return 1 / bspline_autocorrelation_spectrum(d, w);
+    }), 2);
+    const double centred_theory = std::pow(mean_over_period([&](double w) {
+      double B = bspline(d, 0);
+      for (int t = 1; t <= d; ++t) B += 2 * bspline(d, t) * std::cos(t * w);
+      return B * B / bspline_autocorrelation_spectrum(d, w);
+    }), 2);
+    const Image p = resample(k, Display::centred(), N, N);
+    const double coef_gain = variance(k.c.data) / unit;
+    const double centred_gain = variance(std::vector<double>(p.data.begin(), p.data.end())) / unit;
+    EXPECT_NEAR(coef_gain / coef_theory, 1.0, 0.1) << "degree " << d << ": " << coef_gain;
+    EXPECT_NEAR(centred_gain / centred_theory, 1.0, 0.1) << "degree " << d << ": " << centred_gain;
+    if (d == 1) {
+      EXPECT_NEAR(coef_theory, 3.0, 1e-6);
+    }
+    if (d == 3) {
+      EXPECT_NEAR(coef_theory, 24.6, 0.05);
+      EXPECT_NEAR(centred_theory, 1.45, 0.01);
+    }
+  }
+  ProjectionOptions o;
+  o.generator = Kernel::bspline(1);
+  o.method = Method::Conventional;
+  o.boundary = Boundary::Periodic;
+  const Coefficients tent = project(in, N, N, o);
+  EXPECT_NEAR(variance(tent.c.data) / unit / (4.0 / 9.0), 1.0, 0.1) << variance(tent.c.data) / unit;
+}
+
+TEST(Stability, StepOvershootMatchesTheGeneratorsPrediction) {
+  // A vertical step edge on a pixel boundary, densely sampled (s = 16, the
+  // edge on a sample-cell boundary): the displayed overshoot equals the exact
+  // 1-D step response to the quadrature's accuracy.
+  const long N = 64, s = 16;
+  Image in(N * s, 8 * s, 1);
+  for (long j = 0; j < in.height; ++j)
+    for (long i = 0; i < in.width; ++i) in.at(i, j, 0) = i >= N * s / 2 ? 1.0f : 0.0f;
+  for (int d : {1, 2, 3})
+    for (const Display& disp : {Display::centred(), Display::antialiased_2x2()}) {
+      ProjectionOptions o;
+      o.generator = Kernel::bspline(d);
+      const Image p = final_image(project(in, N, 8, o), disp, N, 8);
+      double over = 0, under = 0;
+      for (long x = 0; x < N; ++x) {
+        over = std::max(over, double(p.at(x, 4, 0)) - 1);
+        under = std::max(under, -double(p.at(x, 4, 0)));
+      }
+      const StepResponse theory = step_response(d, disp);
+      EXPECT_GT(theory.overshoot, 1e-3) << d;  // min-error rings: Gibbs
+      EXPECT_NEAR(over, theory.overshoot, 2e-3) << d << " " << disp.name();
+      EXPECT_NEAR(under, theory.undershoot, 2e-3) << d << " " << disp.name();
+    }
+}
+
+TEST(Stability, ClampsBoundTheDisplayedSamples) {
+  Image img(3, 1, 1);
+  img.data = {-0.5f, 0.5f, 2.0f};
+  LocalRange lr(3, 1, 1, 3, 1);
+  const std::vector<float> row = {0.0f, 0.25f, 1.0f};
+  lr.add_rows(0, 1, row.data());
+  const RangeReport r = report_range(img, &lr);
+  EXPECT_EQ(r.negative, 1);
+  EXPECT_EQ(r.out_of_range, 3);
+  EXPECT_EQ(r.min, -0.5);
+  EXPECT_EQ(r.max, 2.0);
+  Image z = img;
+  apply_clamp(z, Clamp::Zero, nullptr);
+  EXPECT_EQ(z.data, (std::vector<float>{0.0f, 0.5f, 2.0f}));
+  Image l = img;
+  apply_clamp(l, Clamp::Local, &lr);
+  EXPECT_EQ(l.data, row);
+  EXPECT_THROW(apply_clamp(l, Clamp::Local, nullptr), std::invalid_argument);
+  EXPECT_THROW(parse_clamp("soft"), std::invalid_argument);
+}
