@@ -239,3 +239,43 @@ TEST_F(Siproject, BadInputGetsAClearErrorAndLosesNothing) {
     EXPECT_EQ(files(), before) << "left a file behind: " << c.args;
   }
 }
+
+TEST_F(Siproject, HdrRemediesAreHonestAboutWhatTheyChange) {
+  // A small square of value 100 on a dim background (0.05).
+  Image in(128, 128, 1);
+  for (long y = 0; y < 128; ++y)
+    for (long x = 0; x < 128; ++x) in.at(x, y, 0) = (x >= 60 && x < 68 && y >= 60 && y < 68) ? 100.0f : 0.05f;
+  write_image(path("hdr.exr"), in);
+  auto negative_energy = [](const Image& img, long* count) {
+    double e = 0;
+    *count = 0;
+    for (float v : img.data)
+      if (v < 0) e += double(v) * v, ++*count;
+    return e;
+  };
+  const std::string base = path("hdr.exr") + " --factor 4 -q --generator cubic -o ";
+  ASSERT_EQ(run(base + path("plain.exr")).status, 0);
+  ASSERT_EQ(run(base + path("zero.exr") + " --clamp zero").status, 0);
+  ASSERT_EQ(run(base + path("hc.exr") + " --highlight-compress").status, 0);
+  ASSERT_EQ(run(base + path("local.exr") + " --clamp local").status, 0);
+  long n_plain, n_zero, n_hc, n_local;
+  const double e_plain = negative_energy(read_image(path("plain.exr")), &n_plain);
+  EXPECT_EQ(negative_energy(read_image(path("zero.exr")), &n_zero), 0.0);
+  const double e_hc = negative_energy(read_image(path("hc.exr")), &n_hc);
+  const Image local = read_image(path("local.exr"));
+  negative_energy(local, &n_local);
+  EXPECT_GT(n_plain, 0) << "min-error cubic rings below zero around the highlight";
+  EXPECT_EQ(n_zero, 0);
+  EXPECT_EQ(n_local, 0);
+  EXPECT_LT(e_hc * 100, e_plain) << e_hc << " vs " << e_plain;
+  for (float v : local.data) EXPECT_LE(v, 100.0f);  // within the input range under each pixel
+  // recorded in the metadata
+  ImageReader plain(path("plain.exr")), hc(path("hc.exr")), zero(path("zero.exr"));
+  EXPECT_EQ(hc.attribute("sis:highlight_compress"), "1");
+  EXPECT_EQ(zero.attribute("sis:clamp"), "zero");
+  EXPECT_EQ(plain.attribute("sis:negative_before_clamp"), std::to_string(n_plain));
+  EXPECT_EQ(zero.attribute("sis:negative_before_clamp"), std::to_string(n_plain));
+  EXPECT_EQ(std::stod(zero.attribute("sis:output_min")), 0.0);
+  EXPECT_NE(plain.attribute("sis:out_of_range_before_clamp"), "0");
+  EXPECT_EQ(run(base + path("x.exr") + " --clamp soft").status, 2);
+}
