@@ -9,9 +9,26 @@ packages=(
   libopenimageio-dev openimageio-tools libopenexr-dev
   libfftw3-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
-  python3 python3-numpy python3-matplotlib
+  python3 python3-venv python3-pip
   time
 )
+
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(dirname "$here")
+
+# The scripts' Python packages: a project-local virtual environment from the
+# pinned requirements, rebuilt only when they change.
+setup_python() {
+  local venv=$root/.venv req=$here/requirements.txt
+  if [ -x "$venv/bin/python" ] && cmp -s "$req" "$venv/requirements.installed"; then
+    return 0
+  fi
+  echo "setup: installing the scripts' Python packages into .venv" >&2
+  rm -rf "$venv"
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install -q --disable-pip-version-check -r "$req"
+  cp "$req" "$venv/requirements.installed"
+}
 
 missing=()
 for p in "${packages[@]}"; do
@@ -19,7 +36,10 @@ for p in "${packages[@]}"; do
     missing+=("$p")
   fi
 done
-[ ${#missing[@]} -eq 0 ] && exit 0
+if [ ${#missing[@]} -eq 0 ]; then
+  setup_python
+  exit 0
+fi
 
 if [ "$(id -u)" -eq 0 ]; then
   sudo=()
@@ -34,3 +54,4 @@ echo "setup: installing ${missing[*]}" >&2
 export DEBIAN_FRONTEND=noninteractive
 "${sudo[@]}" apt-get update -qq
 "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+setup_python
