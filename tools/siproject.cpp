@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -202,7 +203,9 @@ int run(const Options& o) {
         if (y1 < hin) next = std::async(std::launch::async, read, y1, int(b ^ 1));
         float* data = rows[b].data();
         const std::size_t n = std::size_t(y1 - y) * win * C;
-        for (std::size_t q = 0; q < n; ++q)
+        bool all_finite = true;  // a branch-free scan first: the common case
+        for (std::size_t q = 0; q < n; ++q) all_finite &= std::abs(data[q]) <= FLT_MAX;
+        for (std::size_t q = 0; q < n && !all_finite; ++q)
           if (!std::isfinite(data[q])) {
             if (nonfinite++ == 0) {
               first_c = int(q % C);

@@ -72,6 +72,25 @@ LocalRange::LocalRange(long input_width, long input_height, int channels, long w
   std::fill(max_.data.begin(), max_.data.end(), -std::numeric_limits<float>::infinity());
 }
 
+namespace {
+// Min/max over the samples [x_begin[n], x_end[n]) of one row into lo/hi.
+template <int C>
+void row_range_fixed(const float* row, const long* xb, const long* xe, long width, float* lo,
+                     float* hi) {
+  for (long n = 0; n < width; ++n) {
+    float l[C], h[C];
+    for (int c = 0; c < C; ++c) l[c] = lo[n * C + c], h[c] = hi[n * C + c];
+    for (long i = xb[n]; i < xe[n]; ++i)
+      for (int c = 0; c < C; ++c) {
+        const float v = row[std::size_t(i) * C + c];
+        l[c] = v < l[c] ? v : l[c];
+        h[c] = v > h[c] ? v : h[c];
+      }
+    for (int c = 0; c < C; ++c) lo[n * C + c] = l[c], hi[n * C + c] = h[c];
+  }
+}
+}  // namespace
+
 void LocalRange::add_rows(long y0, long y1, const float* rows) {
   const int C = channels_;
   for (long m = 0; m < min_.height; ++m) {
@@ -80,13 +99,19 @@ void LocalRange::add_rows(long y0, long y1, const float* rows) {
       const float* row = rows + std::size_t(j - y0) * win_ * C;
       float* lo = min_.row(m);
       float* hi = max_.row(m);
-      for (long n = 0; n < min_.width; ++n)
-        for (long i = x_begin_[n]; i < x_end_[n]; ++i)
-          for (int c = 0; c < C; ++c) {
-            const float v = row[std::size_t(i) * C + c];
-            lo[n * C + c] = std::min(lo[n * C + c], v);
-            hi[n * C + c] = std::max(hi[n * C + c], v);
-          }
+      switch (C) {
+        case 1: row_range_fixed<1>(row, x_begin_.data(), x_end_.data(), min_.width, lo, hi); break;
+        case 3: row_range_fixed<3>(row, x_begin_.data(), x_end_.data(), min_.width, lo, hi); break;
+        case 4: row_range_fixed<4>(row, x_begin_.data(), x_end_.data(), min_.width, lo, hi); break;
+        default:
+          for (long n = 0; n < min_.width; ++n)
+            for (long i = x_begin_[n]; i < x_end_[n]; ++i)
+              for (int c = 0; c < C; ++c) {
+                const float v = row[std::size_t(i) * C + c];
+                lo[n * C + c] = std::min(lo[n * C + c], v);
+                hi[n * C + c] = std::max(hi[n * C + c], v);
+              }
+      }
     }
   }
 }

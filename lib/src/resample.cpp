@@ -98,8 +98,9 @@ AxisWeights display_axis(const Coefficients& k, int axis, long out_count,
 }
 
 // acc += weight * separable application of (wx, wy) to the coefficients.
+template <typename T>
 void apply_separable(const Grid<double>& c, const AxisWeights& wx, const AxisWeights& wy,
-                     double scale, Grid<double>& acc, int threads) {
+                     double scale, Grid<T>& acc, int threads) {
   const int C = c.channels;
   parallel_for(acc.height, threads, [&](long j0, long j1) {
     std::vector<double> tmp(c.row_size());
@@ -110,7 +111,7 @@ void apply_separable(const Grid<double>& c, const AxisWeights& wx, const AxisWei
         const double* src = c.row(wy.index[e]);
         for (std::size_t q = 0; q < tmp.size(); ++q) tmp[q] += w * src[q];
       }
-      double* out = acc.row(j);
+      T* out = acc.row(j);
       for (long i = 0; i < acc.width; ++i) {
         double v[16] = {0};
         double* vv = C <= 16 ? v : nullptr;
@@ -124,7 +125,8 @@ void apply_separable(const Grid<double>& c, const AxisWeights& wx, const AxisWei
           const double* s = tmp.data() + std::size_t(wx.index[e]) * C;
           for (int ch = 0; ch < C; ++ch) vv[ch] += w * s[ch];
         }
-        for (int ch = 0; ch < C; ++ch) out[std::size_t(i) * C + ch] += scale * vv[ch];
+        for (int ch = 0; ch < C; ++ch)
+          out[std::size_t(i) * C + ch] = static_cast<T>(out[std::size_t(i) * C + ch] + scale * vv[ch]);
       }
     }
   });
@@ -163,37 +165,36 @@ Image resample(const Coefficients& k, const Display& display, long out_width, lo
     m << "resample(): output size " << out_width << " x " << out_height << " is empty";
     throw std::invalid_argument(m.str());
   }
-  Grid<double> acc(out_width, out_height, k.c.channels);
+  // One pass (pixel, or a product set of offsets such as 2x2) writes the
+  // float image directly; other offset lists accumulate in double.
+  Image out(out_width, out_height, k.c.channels);
   if (display.mode == Display::Mode::PixelAverage) {
     const AxisWeights wx = display_axis(k, 0, out_width, {}, true);
     const AxisWeights wy = display_axis(k, 1, out_height, {}, true);
-    apply_separable(k.c, wx, wy, 1.0, acc, threads);
-  } else {
-    if (display.offsets.empty()) throw std::invalid_argument("resample(): display has no offsets");
-    // A product set of offsets (as 2x2) factors into averaged per-axis weights.
-    std::set<double> xs, ys;
-    std::set<std::pair<double, double>> pairs;
-    for (const Vec2& d : display.offsets) {
-      xs.insert(d.x);
-      ys.insert(d.y);
-      pairs.insert({d.x, d.y});
-    }
-    if (pairs.size() == display.offsets.size() && pairs.size() == xs.size() * ys.size()) {
-      const AxisWeights wx =
-          display_axis(k, 0, out_width, std::vector<double>(xs.begin(), xs.end()), false);
-      const AxisWeights wy =
-          display_axis(k, 1, out_height, std::vector<double>(ys.begin(), ys.end()), false);
-      apply_separable(k.c, wx, wy, 1.0, acc, threads);
-    } else {
-      const double scale = 1.0 / display.offsets.size();
-      for (const Vec2& d : display.offsets) {
-        const AxisWeights wx = display_axis(k, 0, out_width, {d.x}, false);
-        const AxisWeights wy = display_axis(k, 1, out_height, {d.y}, false);
-        apply_separable(k.c, wx, wy, scale, acc, threads);
-      }
-    }
+    apply_separable(k.c, wx, wy, 1.0, out, threads);
+    return out;
   }
-  Image out(out_width, out_height, k.c.channels);
+  if (display.offsets.empty()) throw std::invalid_argument("resample(): display has no offsets");
+  std::set<double> xs, ys;
+  std::set<std::pair<double, double>> pairs;
+  for (const Vec2& d : display.offsets) {
+    xs.insert(d.x);
+    ys.insert(d.y);
+    pairs.insert({d.x, d.y});
+  }
+  if (pairs.size() == display.offsets.size() && pairs.size() == xs.size() * ys.size()) {
+    const AxisWeights wx = display_axis(k, 0, out_width, std::vector<double>(xs.begin(), xs.end()), false);
+    const AxisWeights wy = display_axis(k, 1, out_height, std::vector<double>(ys.begin(), ys.end()), false);
+    apply_separable(k.c, wx, wy, 1.0, out, threads);
+    return out;
+  }
+  Grid<double> acc(out_width, out_height, k.c.channels);
+  const double scale = 1.0 / display.offsets.size();
+  for (const Vec2& d : display.offsets) {
+    const AxisWeights wx = display_axis(k, 0, out_width, {d.x}, false);
+    const AxisWeights wy = display_axis(k, 1, out_height, {d.y}, false);
+    apply_separable(k.c, wx, wy, scale, acc, threads);
+  }
   for (std::size_t q = 0; q < out.data.size(); ++q) out.data[q] = static_cast<float>(acc.data[q]);
   return out;
 }
