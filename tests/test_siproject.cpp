@@ -279,3 +279,47 @@ TEST_F(Siproject, HdrRemediesAreHonestAboutWhatTheyChange) {
   EXPECT_NE(plain.attribute("sis:out_of_range_before_clamp"), "0");
   EXPECT_EQ(run(base + path("x.exr") + " --clamp soft").status, 2);
 }
+
+namespace {
+// Rows [y0, y1) of `img` as a band: data window y0..y1, display window whole.
+void write_band(const std::string& path, const Image& img, long y0, long y1) {
+  OIIO::ImageSpec spec(int(img.width), int(y1 - y0), img.channels, OIIO::TypeDesc::HALF);
+  spec.y = int(y0);
+  spec.full_x = 0;
+  spec.full_y = 0;
+  spec.full_width = int(img.width);
+  spec.full_height = int(img.height);
+  auto out = OIIO::ImageOutput::create(path);
+  ASSERT_TRUE(out && out->open(path, spec) &&
+              out->write_image(OIIO::TypeDesc::FLOAT, img.row(y0)) && out->close());
+}
+}  // namespace
+
+TEST_F(Siproject, RowBandsProjectAsOneImage) {
+  const Image in = random_image(96, 80, 3, 7);
+  write_half(path("whole.exr"), in);
+  write_band(path("b0.exr"), in, 0, 13);
+  write_band(path("b1.exr"), in, 13, 50);
+  write_band(path("b2.exr"), in, 50, 80);
+  for (const std::string opts : {"--factor 4", "--size 30x17 --generator tent --display pixel"}) {
+    ASSERT_EQ(run(path("whole.exr") + " -o " + path("a.exr") + " -q " + opts).status, 0);
+    // any order on the command line
+    const Result r = run(path("b2.exr") + " " + path("b0.exr") + " " + path("b1.exr") + " -o " +
+                         path("b.exr") + " -q " + opts);
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_EQ(read_image(path("a.exr")).data, read_image(path("b.exr")).data) << opts;
+  }
+  // a gap, an overlap, a missing last band: errors naming the file, no output
+  write_band(path("over.exr"), in, 40, 80);
+  const auto before = files();
+  Result r = run(path("b0.exr") + " " + path("b2.exr") + " -o " + path("c.exr") + " --factor 4");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.output.find("b2.exr: not a row band"), std::string::npos) << r.output;
+  r = run(path("b0.exr") + " " + path("b1.exr") + " " + path("over.exr") + " -o " + path("c.exr") + " --factor 4");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.output.find("gap or overlap"), std::string::npos) << r.output;
+  r = run(path("b0.exr") + " " + path("b1.exr") + " -o " + path("c.exr") + " --factor 4");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.output.find("the bands end at row 50"), std::string::npos) << r.output;
+  EXPECT_EQ(files(), before);
+}

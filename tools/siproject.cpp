@@ -3,6 +3,7 @@
 // shift-invariant space (min-error) or a conventional filter.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cfloat>
@@ -31,7 +32,8 @@ struct UsageError : std::runtime_error {
 };
 
 struct Options {
-  std::string input, output, coeffs;
+  std::vector<std::string> inputs;
+  std::string output, coeffs;
   double factor = 0;
   std::string size;
   std::string generator = "cubic", method = "min-error", display, boundary = "mirror";
@@ -124,9 +126,13 @@ int run(const Options& o) {
     throw UsageError("--nonfinite '" + o.nonfinite + "': expected error or zero");
   if (o.prefilter != "fft" && o.prefilter != "recursive")
     throw UsageError("--prefilter '" + o.prefilter + "': expected fft or recursive");
-  if (same_file(o.input, o.output)) throw UsageError("-o " + o.output + " is the input file");
-  if (!o.coeffs.empty() && (same_file(o.input, o.coeffs) || same_file(o.output, o.coeffs)))
-    throw UsageError("--coeffs " + o.coeffs + " is the input or the output file");
+  for (const std::string& in : o.inputs) {
+    if (same_file(in, o.output)) throw UsageError("-o " + o.output + " is the input file");
+    if (!o.coeffs.empty() && same_file(in, o.coeffs))
+      throw UsageError("--coeffs " + o.coeffs + " is the input file");
+  }
+  if (!o.coeffs.empty() && same_file(o.output, o.coeffs))
+    throw UsageError("--coeffs " + o.coeffs + " is the output file");
   for (const std::string& path : {o.output, o.coeffs}) {
     if (path.empty()) continue;
     const fs::path p(path);
@@ -138,10 +144,44 @@ int run(const Options& o) {
       throw UsageError("--coeffs " + path + ": coefficient files are float EXR");
   }
 
-  ImageReader reader(o.input);
-  const long win = reader.width(), hin = reader.height();
+  // Several inputs are row bands of one image: each band's data window
+  // spans the full width and the bands tile the display window's rows.
+  std::vector<std::unique_ptr<ImageReader>> readers;
+  for (const std::string& in : o.inputs) readers.push_back(std::make_unique<ImageReader>(in));
+  std::sort(readers.begin(), readers.end(),
+            [](const auto& a, const auto& b) { return a->data_y() < b->data_y(); });
+  ImageReader& reader = *readers.front();
+  long win = reader.width(), hin = reader.height();
   const int C = reader.channels();
   const std::vector<std::string> names = reader.channel_names();
+  if (readers.size() > 1) {
+    long next = reader.full_y();
+    for (const auto& r : readers) {
+      std::ostringstream m;
+      m << r->path() << ": not a row band of " << reader.path() << "'s image: ";
+      if (is_coefficient_file(*r)) throw UsageError(r->path() + ": a coefficient file cannot be a band");
+      if (r->channels() != C || r->channel_names() != names)
+        throw InputError(m.str() + "other channels");
+      if (r->full_x() != reader.full_x() || r->full_y() != reader.full_y() ||
+          r->full_width() != reader.full_width() || r->full_height() != reader.full_height())
+        throw InputError(m.str() + "another display window");
+      if (r->data_x() != r->full_x() || r->width() != r->full_width())
+        throw InputError(m.str() + "its data window does not span the full width");
+      if (r->data_y() != next) {
+        m << "rows from " << r->data_y() << " where row " << next << " was expected (gap or overlap)";
+        throw InputError(m.str());
+      }
+      next = r->data_y() + r->height();
+    }
+    if (next != reader.full_y() + reader.full_height()) {
+      std::ostringstream m;
+      m << "the bands end at row " << next << " of a display window ending at row "
+        << reader.full_y() + reader.full_height();
+      throw InputError(m.str());
+    }
+    win = reader.full_width();
+    hin = reader.full_height();
+  }
   auto out_size = [&](long w, long h) -> std::pair<long, long> {
     if (size.first) return size;
     if (o.factor == 0) return {w, h};
@@ -165,12 +205,13 @@ int run(const Options& o) {
       if (int(q % C) != alpha) data[q] = static_cast<float>(f(data[q]));
   };
   if (is_coefficient_file(reader)) {
+    if (readers.size() > 1) throw UsageError("a coefficient file is evaluated alone, not with other inputs");
     if (o.generator_given || o.method_given || o.boundary_given || o.highlight_compress)
-      throw UsageError(o.input + " is a coefficient file: its generator, method, boundary and "
+      throw UsageError(reader.path() + " is a coefficient file: its generator, method, boundary and "
                        "highlight compression are recorded in it; drop --generator, --method, "
                        "--boundary and --highlight-compress");
     if (clamp == Clamp::Local)
-      throw UsageError("--clamp local needs the input samples; " + o.input + " is a coefficient file");
+      throw UsageError("--clamp local needs the input samples; " + reader.path() + " is a coefficient file");
     compressed = reader.attribute("sis:highlight_compress") == "1";
     const auto t = Clock::now();
     k = read_coefficients(reader);
@@ -184,23 +225,40 @@ int run(const Options& o) {
                                boundary, method);
     Acquisition acquisition(plan, threads);
     local = std::make_unique<LocalRange>(win, hin, C, W, H);
-    const long strip = reader.preferred_strip();
+    // The rows as chunks of the bands (one band for one input), in order.
+    struct Chunk {
+      ImageReader* reader;
+      long y0, y1, global;
+    };
+    std::vector<Chunk> chunks;
+    long strip = 0;
+    long g = 0;
+    for (const auto& r : readers) {
+      strip = std::max(strip, r->preferred_strip());
+      for (long y = 0; y < r->height(); y += r->preferred_strip()) {
+        const long y1 = std::min(r->height(), y + r->preferred_strip());
+        chunks.push_back({r.get(), y, y1, g + y});
+      }
+      g += r->height();
+    }
     // Two strip buffers: the next strip is decoded while this one is acquired.
     std::vector<float> rows[2] = {std::vector<float>(std::size_t(strip) * win * C),
                                   std::vector<float>(std::size_t(strip) * win * C)};
     long nonfinite = 0, first_x = -1, first_y = -1;
     int first_c = -1;
+    std::string first_file;
     {
       Progress progress(!o.quiet, "reading and acquiring");
       const auto t = Clock::now();
-      auto read = [&](long y, int b) {
-        reader.read_rows(y, std::min(hin, y + strip), rows[b].data());
+      auto read = [&](std::size_t i, int b) {
+        chunks[i].reader->read_rows(chunks[i].y0, chunks[i].y1, rows[b].data());
       };
-      std::future<void> next = std::async(std::launch::async, read, 0L, 0);
-      for (long y = 0, b = 0; y < hin; y += strip, b ^= 1) {
-        const long y1 = std::min(hin, y + strip);
+      std::future<void> next = std::async(std::launch::async, read, std::size_t(0), 0);
+      for (std::size_t i = 0, b = 0; i < chunks.size(); ++i, b ^= 1) {
+        const Chunk& ch = chunks[i];
+        const long y = ch.global, y1 = ch.global + ch.y1 - ch.y0;
         next.get();  // rethrows a read error
-        if (y1 < hin) next = std::async(std::launch::async, read, y1, int(b ^ 1));
+        if (i + 1 < chunks.size()) next = std::async(std::launch::async, read, i + 1, int(b ^ 1));
         float* data = rows[b].data();
         const std::size_t n = std::size_t(y1 - y) * win * C;
         bool all_finite = true;  // a branch-free scan first: the common case
@@ -210,7 +268,8 @@ int run(const Options& o) {
             if (nonfinite++ == 0) {
               first_c = int(q % C);
               first_x = long((q / C) % win);
-              first_y = y + long(q / (std::size_t(win) * C));
+              first_y = ch.y0 + long(q / (std::size_t(win) * C));
+              first_file = ch.reader->path();
             }
             data[q] = 0.0f;
           }
@@ -227,7 +286,7 @@ int run(const Options& o) {
     }
     if (nonfinite) {
       std::ostringstream m;
-      m << o.input << ": non-finite sample (NaN or Inf) at x " << first_x << ", y " << first_y
+      m << first_file << ": non-finite sample (NaN or Inf) at x " << first_x << ", y " << first_y
         << ", channel " << (first_c < int(names.size()) ? names[first_c] : std::to_string(first_c));
       if (o.nonfinite == "error") {
         m << "; use --nonfinite zero to replace them with 0";
@@ -259,7 +318,8 @@ int run(const Options& o) {
       {"sis:generator", k.generator.name()},
       {"sis:display", shown.name()},
       {"sis:boundary", boundary_name(k.boundary)},
-      {"sis:input", fs::path(o.input).filename().string()},
+      {"sis:input", fs::path(reader.path()).filename().string() +
+                        (readers.size() > 1 ? " and " + std::to_string(readers.size() - 1) + " more bands" : "")},
       {"sis:highlight_compress", compressed ? "1" : "0"},
       {"sis:clamp", clamp_name(clamp)},
       {"sis:output_min", std::to_string(after.min)},
@@ -272,7 +332,7 @@ int run(const Options& o) {
   t = Clock::now();
   if (!o.coeffs.empty())
     write_coefficients(o.coeffs, k, names,
-                       {{"sis:input", fs::path(o.input).filename().string()},
+                       {{"sis:input", md[4].second},
                         {"sis:highlight_compress", compressed ? "1" : "0"}});
   write_image(o.output, image, names, md, reader.alpha_channel());
   const double t_write = seconds_since(t);
@@ -313,7 +373,10 @@ int main(int argc, char** argv) {
       "with any --display.\n"
       "Exit status: 0 success, 2 usage, 3 input, 4 output.",
       "siproject"};
-  app.add_option("IN", o.input, "input image, or a coefficient file written by --coeffs")->required();
+  app.add_option("IN", o.inputs,
+                 "input image, or a coefficient file written by --coeffs; several inputs are row "
+                 "bands of one image (by their data windows, e.g. partial renders cropped with "
+                 "oiiotool --crop), projected as one")->required();
   app.add_option("-o,--output", o.output, "output image (.exr float; .png/.jpg/.tif 8-bit sRGB)")->required();
   app.add_option("--factor", o.factor, "supersampling factor per axis: output = input / S (any real S > 0)")
       ->check(CLI::PositiveNumber);

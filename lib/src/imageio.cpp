@@ -51,7 +51,12 @@ ImageReader::~ImageReader() {
 long ImageReader::width() const { return impl_->spec.width; }
 long ImageReader::height() const { return impl_->spec.height; }
 int ImageReader::channels() const { return impl_->spec.nchannels; }
+long ImageReader::data_x() const { return impl_->spec.x; }
 long ImageReader::data_y() const { return impl_->spec.y; }
+long ImageReader::full_x() const { return impl_->spec.full_x; }
+long ImageReader::full_y() const { return impl_->spec.full_y; }
+long ImageReader::full_width() const { return impl_->spec.full_width; }
+long ImageReader::full_height() const { return impl_->spec.full_height; }
 int ImageReader::alpha_channel() const { return impl_->spec.alpha_channel; }
 std::string ImageReader::format_name() const { return impl_->in->format_name(); }
 std::vector<std::string> ImageReader::channel_names() const { return impl_->spec.channelnames; }

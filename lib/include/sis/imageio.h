@@ -35,7 +35,13 @@ class ImageReader {
   long width() const;
   long height() const;
   int channels() const;
+  long data_x() const;  // first column of the data window
   long data_y() const;  // first row of the data window
+  // The display (full) window, of which the data window may be a band.
+  long full_x() const;
+  long full_y() const;
+  long full_width() const;
+  long full_height() const;
   std::vector<std::string> channel_names() const;
   int alpha_channel() const;  // -1 if none
   std::string format_name() const;
