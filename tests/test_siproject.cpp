@@ -12,6 +12,7 @@
 #include <random>
 
 #include "sis/imageio.h"
+#include "sis/metrics.h"
 #include "sis/projection.h"
 
 namespace fs = std::filesystem;
@@ -28,8 +29,8 @@ struct Result {
   std::string output;  // stdout and stderr
 };
 
-Result run(const std::string& args) {
-  const std::string cmd = std::string(SIPROJECT) + " " + args + " 2>&1";
+Result run_tool(const char* tool, const std::string& args) {
+  const std::string cmd = std::string(tool) + " " + args + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   std::string out;
   char buf[4096];
@@ -38,6 +39,8 @@ Result run(const std::string& args) {
   const int st = pclose(p);
   return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
 }
+
+Result run(const std::string& args) { return run_tool(SIPROJECT, args); }
 
 class Siproject : public ::testing::Test {
  protected:
@@ -322,4 +325,37 @@ TEST_F(Siproject, RowBandsProjectAsOneImage) {
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.output.find("the bands end at row 50"), std::string::npos) << r.output;
   EXPECT_EQ(files(), before);
+}
+
+TEST_F(Siproject, SimetricsContinuousErrorOfAZonePlate) {
+  // The zone plate of scenes/zoneplate.pov, sampled at factor 4, has its
+  // truth in closed form: min-error cubic must approximate it far better
+  // than the conventional tent, and simetrics must report what the library
+  // computes.
+  const double K = 0.7 * std::acos(-1.0) * 48;
+  auto zp = [K](double x, double y, int) {
+    const double u = x / 48 - 0.5, v = y / 48 - 0.5;
+    return 0.5 + 0.5 * std::cos(K * (u * u + v * v));
+  };
+  Image in(192, 192, 1);
+  for (long j = 0; j < 192; ++j)
+    for (long i = 0; i < 192; ++i) in.at(i, j, 0) = float(zp((i + 0.5) / 4, (j + 0.5) / 4, 0));
+  write_image(path("zp.exr"), in);
+  auto l2 = [&](const std::string& opts) {
+    EXPECT_EQ(run(path("zp.exr") + " -o " + path("o.exr") + " --factor 4 -q --coeffs " +
+                  path("c.exr") + " " + opts).status, 0);
+    const Result r = run_tool(SIMETRICS, path("o.exr") + " --coeffs " + path("c.exr") +
+                                             " --zoneplate " + std::to_string(K) + " --border 2 --json");
+    EXPECT_EQ(r.status, 0) << r.output;
+    const auto at = r.output.find("\"l2_error\": ");
+    EXPECT_NE(at, std::string::npos) << r.output;
+    return std::stod(r.output.substr(at + 12));
+  };
+  const double cubic = l2("--generator cubic"), tent = l2("--generator tent --method conventional");
+  ImageReader reader(path("c.exr"));
+  const Coefficients k = read_coefficients(reader);
+  EXPECT_NEAR(tent, l2_error(k, zp, 8, 2.0), 1e-9);
+  EXPECT_LT(cubic * 3, tent) << cubic << " " << tent;
+  EXPECT_EQ(run_tool(SIMETRICS, path("o.exr") + " --coeffs " + path("c.exr")).status, 2);
+  EXPECT_EQ(run_tool(SIMETRICS, path("missing.exr")).status, 3);
 }

@@ -27,7 +27,9 @@ struct UsageError : std::runtime_error {
 };
 
 struct Options {
-  std::string image, reference, input;
+  std::string image, reference, input, coeffs, truth;
+  double zoneplate = 0;
+  int samples_per_pixel = 8;
   double factor = 0;
   std::vector<double> cutoffs{0.125, 0.25};
   long border = 0;
@@ -201,6 +203,44 @@ int run(const Options& o) {
     inner.number("max", r.max);
     report.object("overshoot", inner);
   }
+  if (!o.coeffs.empty()) {
+    if (o.truth.empty() == (o.zoneplate == 0))
+      throw UsageError("--coeffs needs exactly one truth: --truth REF or --zoneplate K");
+    ImageReader reader(o.coeffs);
+    if (!is_coefficient_file(reader))
+      throw UsageError("--coeffs " + o.coeffs + " is not a coefficient file (siproject --coeffs)");
+    if (reader.attribute("sis:highlight_compress") == "1")
+      throw UsageError("--coeffs " + o.coeffs + " holds a highlight-compressed approximation: its "
+                       "continuous error is not measured");
+    const Coefficients k = read_coefficients(reader);
+    Report inner;
+    inner.string("coeffs", o.coeffs);
+    inner.string("method", k.min_error ? "min-error" : "conventional");
+    inner.string("generator", k.generator.name());
+    inner.number("border", o.border);
+    if (!o.truth.empty()) {
+      const Image truth = read_finite(o.truth);
+      if (truth.channels != k.c.channels)
+        throw UsageError("--truth " + o.truth + " has " + std::to_string(truth.channels) +
+                         " channels, the coefficients " + std::to_string(k.c.channels));
+      inner.string("truth", o.truth);
+      inner.integer("truth_width", truth.width);
+      inner.integer("truth_height", truth.height);
+      inner.number("l2_error", l2_error(k, truth, double(o.border)));
+    } else {
+      // scenes/zoneplate.pov: f(u, v) = 1/2 + 1/2 cos(K ((u - 1/2)^2 + (v - 1/2)^2)),
+      // u = x / W, v = y / H over the frame, every channel alike.
+      const double K = o.zoneplate, W = k.image_width, H = k.image_height;
+      auto f = [K, W, H](double x, double y, int) {
+        const double u = x / W - 0.5, v = y / H - 0.5;
+        return 0.5 + 0.5 * std::cos(K * (u * u + v * v));
+      };
+      inner.number("zoneplate_k", K);
+      inner.integer("samples_per_pixel", o.samples_per_pixel);
+      inner.number("l2_error", l2_error(k, f, o.samples_per_pixel, double(o.border)));
+    }
+    report.object("continuous", inner);
+  }
   std::cout << (o.json ? report.json() + "\n" : report.text());
   std::cout.flush();
   return std::cout ? 0 : 1;
@@ -248,6 +288,17 @@ int main(int argc, char** argv) {
                  "T * max(1, |bound|); the extremes are reported exactly")
       ->check(at_least_zero(false))
       ->capture_default_str();
+  app.add_option("--coeffs", o.coeffs,
+                 "coefficient file of the approximation (siproject --coeffs): report its "
+                 "continuous L2 error against --truth or --zoneplate");
+  app.add_option("--truth", o.truth,
+                 "render of the same frame at a much higher factor: the truth for --coeffs");
+  app.add_option("--zoneplate", o.zoneplate,
+                 "closed-form truth of scenes/zoneplate.pov with ZP_K = K, for --coeffs")
+      ->check(at_least_zero(true));
+  app.add_option("--samples-per-pixel", o.samples_per_pixel,
+                 "points per output pixel and axis where the closed form is compared")
+      ->check(CLI::PositiveNumber)->capture_default_str();
   app.add_flag("--json", o.json, "print one JSON object instead of 'key value' lines");
   try {
     app.parse(argc, argv);
