@@ -1,11 +1,76 @@
 # Shift-invariant rendering: the project's make driver.
-#   make        set up, build, render the default scene and form its images
-#   make test   set up, build, run every test (ctest)
+#   make             set up what is missing, build, render the default scene
+#                    and form its images, one per method, then print a summary
+#   make all-scenes  the same for every scene in scenes/
+#   make test        set up, build, run every test (ctest)
+#   make clean       remove the build folder and out/
+#
+# Variables (make VAR=value):
+#   SCENE=checker    scene name: $(SCENEDIR)/$(SCENE).pov (SCENEDIR=scenes)
+#   RES=1000         output size: N (N x N) or WxH
+#   FACTOR=4         supersampling factor per axis: POV-Ray renders
+#                    round(RES * FACTOR) pixels per axis with antialiasing off,
+#                    FACTOR^2 rays per output pixel
+#   METHODS=...      methods to form (default: all of them, see METHOD_OPTS_*)
+#   CUTOFFS=0.125 0.25   high-pass cutoffs (cycles/pixel) in the summary
+#   SIFLAGS=         extra siproject options for every method (--boundary periodic)
+#   POVOPTS=         extra POV-Ray options for every render (Declare=X=1)
+#   ZP_NYQUIST=0.7   zoneplate only: local frequency at the middle of the left
+#                    and right edges, as a fraction of Nyquist at output size
+#   OUT=out  BUILD=build  JOBS=$(nproc)
+#   SIPROJECT=, SIMETRICS=  use these binaries as they are (no setup or build)
+#
+# Files:
+#   $(OUT)/render/SCENE-RES-fFACTOR.exr   POV-Ray's render (half float, linear)
+#   $(OUT)/SCENE/METHOD.exr, .png, .log   float result, 8-bit sRGB image,
+#                                         siproject -v output (stage times)
+#   $(OUT)/SCENE/summary.txt, .csv        time and high-pass share per method
+# A render is redone when its scene, povray.ini, size, factor or POV-Ray
+# options change; an image when its render, siproject or its options change.
+# Hidden stamp files (.NAME.cmd) hold the options each file was made with.
 BUILD ?= build
 JOBS  ?= $(shell nproc)
+OUT   ?= out
 
-.PHONY: all setup build test clean
+SCENE  ?= checker
+RES    ?= 1000
+FACTOR ?= 4
+METHODS ?= box conv-tent me-tent mitchell me-cubic me-tent-2x2 me-cubic-2x2
+CUTOFFS ?= 0.125 0.25
+SIFLAGS ?=
+POVOPTS ?=
+ZP_NYQUIST ?= 0.7
+SCENEDIR ?= scenes
+
+# siproject options of each method. Every choice is spelled out: siproject's
+# default display for min-error is 2x2, so the plain min-error methods say
+# centred. Box: the normalised average over the pixel, which equals min-error
+# box (DESIGN.md section 3).
+METHOD_OPTS_box          := --generator box --method conventional --display centred
+METHOD_OPTS_conv-tent    := --generator tent --method conventional --display centred
+METHOD_OPTS_me-tent      := --generator tent --method min-error --display centred
+METHOD_OPTS_mitchell     := --generator mitchell --method conventional --display centred
+METHOD_OPTS_me-cubic     := --generator cubic --method min-error --display centred
+METHOD_OPTS_me-tent-2x2  := --generator tent --method min-error --display 2x2
+METHOD_OPTS_me-cubic-2x2 := --generator cubic --method min-error --display 2x2
+
+# Binaries given on the command line are used as they are; the default ones
+# are brought up to date by the build target first.
+SIPROJECT ?= $(BUILD)/tools/siproject
+SIMETRICS ?= $(BUILD)/tools/simetrics
+PREBUILT := $(filter command line environment,$(origin SIPROJECT))
+
+# Sub-makes (cmake --build) print no "Entering directory" lines.
+MAKEFLAGS += --no-print-directory
+# One job at a time: POV-Ray and siproject use every core themselves, and the
+# times in the summary stay comparable.
+.NOTPARALLEL:
+.DELETE_ON_ERROR:
+
+.PHONY: all scene all-scenes setup build test clean FORCE
 .DEFAULT_GOAL := all
+
+all: scene
 
 setup:
 	@bash scripts/setup.sh
@@ -18,4 +83,102 @@ test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 clean:
-	rm -rf $(BUILD) out
+	rm -rf $(BUILD) $(OUT)
+
+ifeq ($(PREBUILT),)
+$(SIPROJECT): build ;
+endif
+
+# ---- the render pipeline ------------------------------------------------------
+# Goals other than these need valid sizes.
+ifneq ($(filter-out setup build test clean FORCE,$(or $(MAKECMDGOALS),all)),)
+
+RES_W := $(firstword $(subst x, ,$(RES)))
+RES_H := $(or $(word 2,$(subst x, ,$(RES))),$(RES_W))
+ifneq ($(shell echo '$(RES_W) $(RES_H)' | grep -Ex '[1-9][0-9]* [1-9][0-9]*'),$(RES_W) $(RES_H))
+$(error RES=$(RES): expected N or WxH, positive integers)
+endif
+ifneq ($(words $(subst x, ,$(RES))),$(if $(findstring x,$(RES)),2,1))
+$(error RES=$(RES): expected N or WxH, positive integers)
+endif
+ifeq ($(shell echo '$(FACTOR)' | grep -Ex '([0-9]+\.?[0-9]*|\.[0-9]+)' | awk '$$1 > 0'),)
+$(error FACTOR=$(FACTOR): expected a positive number)
+endif
+RES_TAG := $(if $(filter $(RES_W),$(RES_H)),$(RES_W),$(RES_W)x$(RES_H))
+RENDER_W := $(shell awk 'BEGIN { printf "%d", $(RES_W) * $(FACTOR) + 0.5 }')
+RENDER_H := $(shell awk 'BEGIN { printf "%d", $(RES_H) * $(FACTOR) + 0.5 }')
+unknown_methods := $(strip $(foreach m,$(METHODS),$(if $(METHOD_OPTS_$(m)),,$(m))))
+ifneq ($(unknown_methods),)
+$(error unknown method(s) $(unknown_methods); known: box conv-tent me-tent mitchell me-cubic me-tent-2x2 me-cubic-2x2)
+endif
+
+ALL_SCENES := $(sort $(basename $(notdir $(wildcard $(SCENEDIR)/*.pov))))
+ifeq ($(filter $(SCENE),$(ALL_SCENES)),)
+ifneq ($(filter all scene,$(or $(MAKECMDGOALS),all)),)
+$(error no scene $(SCENEDIR)/$(SCENE).pov; scenes: $(ALL_SCENES))
+endif
+endif
+
+# The zone plate's frequency scales with the output width (scenes/zoneplate.pov).
+POVOPTS_zoneplate = Declare=ZP_K=$(shell awk 'BEGIN { printf "%.6f", $(ZP_NYQUIST) * atan2(0, -1) * $(RES_W) }')
+
+# Writes TEXT to the stamp FILE only when it differs, so that FILE's time
+# changes only with its content. $(call stamp,FILE,TEXT)
+define stamp
+$(shell mkdir -p $(dir $(1)))$(file >$(1).tmp,$(2))
+@if cmp -s $(1).tmp $(1); then rm -f $(1).tmp; else mv -f $(1).tmp $(1); fi
+endef
+
+render_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR).exr
+render_stamp_of = $(OUT)/render/.$(1)-$(RES_TAG)-f$(FACTOR).cmd
+render_opts_of = $(strip $(POVOPTS_$(1)) $(POVOPTS))
+method_cmd_of = $(strip $(SIPROJECT) $(call render_of,$(1)) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(SIFLAGS))
+summary_of = $(OUT)/$(1)/summary.txt
+
+# $(call scene_rules,SCENE)
+define scene_rules
+$(call render_stamp_of,$(1)): FORCE
+	$$(call stamp,$$@,$(RENDER_W) $(RENDER_H) $(call render_opts_of,$(1)))
+
+$(call render_of,$(1)): $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) | $(if $(PREBUILT),,setup)
+	@printf 'render   %-10s %s x %s (%s x %s, factor %s) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(RES_W) $(RES_H) $(FACTOR) $$@
+	@bash scripts/render.sh $$< $$@ $(RENDER_W) $(RENDER_H) $(call render_opts_of,$(1))
+
+$(OUT)/$(1)/.summary.cmd: FORCE
+	$$(call stamp,$$@,$(METHODS) | $(CUTOFFS) | $(call render_of,$(1)))
+
+$(OUT)/$(1)/summary.txt $(OUT)/$(1)/summary.csv &: $(foreach m,$(METHODS),$(OUT)/$(1)/$(m).exr) scripts/summary.sh $(wildcard $(SIMETRICS)) $(OUT)/$(1)/.summary.cmd
+	@bash scripts/summary.sh --dir $(OUT)/$(1) --render $(call render_of,$(1)) \
+	  --sizes '$(RES_W) $(RES_H) $(RENDER_W) $(RENDER_H)' --simetrics '$(SIMETRICS)' --cutoffs '$(CUTOFFS)' $(METHODS)
+endef
+
+# $(call method_rules,SCENE,METHOD): METHOD.exr (float), .png (8-bit sRGB) and
+# .log (siproject -v: the stage times) from one render; written to temporary
+# names and renamed when both runs succeeded.
+define method_rules
+$(OUT)/$(1)/.$(2).cmd: FORCE
+	$$(call stamp,$$@,$(call method_cmd_of,$(1),$(2)))
+
+$(OUT)/$(1)/$(2).exr $(OUT)/$(1)/$(2).png $(OUT)/$(1)/$(2).log &: $(call render_of,$(1)) $(SIPROJECT) $(OUT)/$(1)/.$(2).cmd
+	@t=$(OUT)/$(1)/.$(2).tmp; \
+	$(call method_cmd_of,$(1),$(2)) -o $$$$t.exr -v 2>$$$$t.log && \
+	$(call method_cmd_of,$(1),$(2)) -o $$$$t.png -q || \
+	{ rc=$$$$?; cat $$$$t.log >&2; rm -f $$$$t.exr $$$$t.png $$$$t.log; exit $$$$rc; }; \
+	mv -f $$$$t.exr $(OUT)/$(1)/$(2).exr && mv -f $$$$t.png $(OUT)/$(1)/$(2).png && mv -f $$$$t.log $(OUT)/$(1)/$(2).log && \
+	printf 'project  %-10s %-13s %s s\n' $(1) $(2) "$$$$(sed -n 's/.*total \([0-9.]*\) s.*/\1/p' $(OUT)/$(1)/$(2).log)"
+endef
+
+$(foreach s,$(ALL_SCENES),$(eval $(call scene_rules,$(s)))$(foreach m,$(METHODS),$(eval $(call method_rules,$(s),$(m)))))
+
+# Without SIPROJECT given, set up and build first (the build brings the
+# default binaries up to date; images depend on them).
+scene: $(if $(PREBUILT),,build) $(call summary_of,$(SCENE))
+	@echo
+	@cat $(call summary_of,$(SCENE))
+
+all-scenes: $(if $(PREBUILT),,build) $(foreach s,$(ALL_SCENES),$(call summary_of,$(s)))
+	@for f in $(filter %/summary.txt,$^); do echo; cat "$$f"; done
+
+endif
+
+FORCE:
