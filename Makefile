@@ -17,11 +17,17 @@
 #   POVOPTS=         extra POV-Ray options for every render (Declare=X=1)
 #   ZP_NYQUIST=0.7   zoneplate only: local frequency at the middle of the left
 #                    and right edges, as a fraction of Nyquist at output size
+#   TILES=1          render in TILES row bands, each its own POV-Ray process
+#                    (+SR/+ER, cropped to its rows with oiiotool): with make -j
+#                    they render in parallel, and a make-driven farm can send
+#                    them to other machines; siproject projects the bands as one
+#                    image, equal to the single render's result
 #   OUT=out  BUILD=build  JOBS=$(nproc)
 #   SIPROJECT=, SIMETRICS=  use these binaries as they are (no setup or build)
 #
 # Files:
 #   $(OUT)/render/SCENE-RES-fFACTOR.exr   POV-Ray's render (half float, linear)
+#   $(OUT)/render/SCENE-RES-fFACTOR-bandIofK.exr   its row bands (TILES=K)
 #   $(OUT)/SCENE/METHOD.exr, .png, .log   float result, 8-bit sRGB image,
 #                                         siproject -v output (stage times)
 #   $(OUT)/SCENE/summary.txt, .csv        time and high-pass share per method
@@ -41,6 +47,7 @@ SIFLAGS ?=
 POVOPTS ?=
 ZP_NYQUIST ?= 0.7
 SCENEDIR ?= scenes
+TILES ?= 1
 
 # siproject options of each method. Every choice is spelled out: siproject's
 # default display for min-error is 2x2, so the plain min-error methods say
@@ -63,8 +70,11 @@ PREBUILT := $(filter command line environment,$(origin SIPROJECT))
 # Sub-makes (cmake --build) print no "Entering directory" lines.
 MAKEFLAGS += --no-print-directory
 # One job at a time: POV-Ray and siproject use every core themselves, and the
-# times in the summary stay comparable.
+# times in the summary stay comparable. Bands (TILES > 1) are meant to run
+# in parallel.
+ifeq ($(TILES),1)
 .NOTPARALLEL:
+endif
 .DELETE_ON_ERROR:
 
 .PHONY: all scene all-scenes setup build test clean FORCE
@@ -104,6 +114,9 @@ endif
 ifeq ($(shell echo '$(FACTOR)' | grep -Ex '([0-9]+\.?[0-9]*|\.[0-9]+)' | awk '$$1 > 0'),)
 $(error FACTOR=$(FACTOR): expected a positive number)
 endif
+ifneq ($(shell echo '$(TILES)' | grep -Ex '[1-9][0-9]*'),$(TILES))
+$(error TILES=$(TILES): expected a positive whole number)
+endif
 RES_TAG := $(if $(filter $(RES_W),$(RES_H)),$(RES_W),$(RES_W)x$(RES_H))
 RENDER_W := $(shell awk 'BEGIN { printf "%d", $(RES_W) * $(FACTOR) + 0.5 }')
 RENDER_H := $(shell awk 'BEGIN { printf "%d", $(RES_H) * $(FACTOR) + 0.5 }')
@@ -132,8 +145,25 @@ endef
 render_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR).exr
 render_stamp_of = $(OUT)/render/.$(1)-$(RES_TAG)-f$(FACTOR).cmd
 render_opts_of = $(strip $(POVOPTS_$(1)) $(POVOPTS))
-method_cmd_of = $(strip $(SIPROJECT) $(call render_of,$(1)) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(SIFLAGS))
+# Row bands: band I of TILES covers render rows [I H / TILES, (I + 1) H / TILES).
+band_indices := $(shell seq 0 $$(( $(TILES) - 1 )))
+band_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)-band$(2)of$(TILES).exr
+band_y0 = $(shell echo $$(( ( $(1) ) * $(RENDER_H) / $(TILES) )))
+inputs_of = $(if $(filter 1,$(TILES)),$(call render_of,$(1)),$(foreach i,$(band_indices),$(call band_of,$(1),$(i))))
+method_cmd_of = $(strip $(SIPROJECT) $(call inputs_of,$(1)) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(SIFLAGS))
 summary_of = $(OUT)/$(1)/summary.txt
+
+# $(call band_rules,SCENE,I,Y0,Y1): band I, render rows [Y0, Y1): POV-Ray
+# renders the full frame with only those rows traced (+SR/+ER count rows
+# from 1; 3.7 writes the rest black), oiiotool crops it to its data window.
+define band_rules
+$(call band_of,$(1),$(2)): $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) | $(if $(PREBUILT),,setup)
+	@printf 'render   %-10s band %s of %s: rows %s to %s of %s x %s\n' $(1) $(2) $(TILES) $(3) $$$$(( $(4) - 1 )) $(RENDER_W) $(RENDER_H)
+	@t=$$(basename $$@).tmp; \
+	bash scripts/render.sh $$< $$$$t-frame.exr $(RENDER_W) $(RENDER_H) $(call render_opts_of,$(1)) +SR$$$$(( $(3) + 1 )) +ER$(4) && \
+	oiiotool $$$$t-frame.exr --crop $(RENDER_W)x$$$$(( $(4) - $(3) ))+0+$(3) -d half -o $$$$t.exr && \
+	rm -f $$$$t-frame.exr && mv -f $$$$t.exr $$@ || { rc=$$$$?; rm -f $$$$t-frame.exr $$$$t.exr; exit $$$$rc; }
+endef
 
 # $(call scene_rules,SCENE)
 define scene_rules
@@ -159,7 +189,7 @@ define method_rules
 $(OUT)/$(1)/.$(2).cmd: FORCE
 	$$(call stamp,$$@,$(call method_cmd_of,$(1),$(2)))
 
-$(OUT)/$(1)/$(2).exr $(OUT)/$(1)/$(2).png $(OUT)/$(1)/$(2).log &: $(call render_of,$(1)) $(SIPROJECT) $(OUT)/$(1)/.$(2).cmd
+$(OUT)/$(1)/$(2).exr $(OUT)/$(1)/$(2).png $(OUT)/$(1)/$(2).log &: $(call inputs_of,$(1)) $(SIPROJECT) $(OUT)/$(1)/.$(2).cmd
 	@t=$(OUT)/$(1)/.$(2).tmp; \
 	$(call method_cmd_of,$(1),$(2)) -o $$$$t.exr -v 2>$$$$t.log && \
 	$(call method_cmd_of,$(1),$(2)) -o $$$$t.png -q || \
@@ -168,6 +198,7 @@ $(OUT)/$(1)/$(2).exr $(OUT)/$(1)/$(2).png $(OUT)/$(1)/$(2).log &: $(call render_
 	printf 'project  %-10s %-13s %s s\n' $(1) $(2) "$$$$(sed -n 's/.*total \([0-9.]*\) s.*/\1/p' $(OUT)/$(1)/$(2).log)"
 endef
 
+$(foreach s,$(ALL_SCENES),$(foreach i,$(band_indices),$(eval $(call band_rules,$(s),$(i),$(call band_y0,$(i)),$(call band_y0,$(i) + 1)))))
 $(foreach s,$(ALL_SCENES),$(eval $(call scene_rules,$(s)))$(foreach m,$(METHODS),$(eval $(call method_rules,$(s),$(m)))))
 
 # Without SIPROJECT given, set up and build first (the build brings the
