@@ -177,3 +177,29 @@ TEST(Stability, ClampsBoundTheDisplayedSamples) {
   EXPECT_THROW(apply_clamp(l, Clamp::Local, nullptr), std::invalid_argument);
   EXPECT_THROW(parse_clamp("soft"), std::invalid_argument);
 }
+
+TEST(Numerics, PrefilterErrorStaysNearRoundingForEveryDegree) {
+  // Zero-mean random r excites every frequency (the worst case for the
+  // conditioning). Prefiltering r rounded to float against r in double: the
+  // difference, relative to the largest coefficient, stays at float rounding
+  // (2^-24 = 6e-8) for every degree, though the 2-D condition number reaches
+  // 4.7e5 at degree 7: the amplified frequencies are amplified alike in c.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int d = 0; d <= kMaxDegree; ++d) {
+    const long n = 128;
+    Grid<double> r(n, n, 1);
+    for (double& v : r.data) v = u(rng);
+    Grid<double> rf = r, c = r;
+    for (double& v : rf.data) v = static_cast<float>(v);
+    const PrefilterPlan plan(d, n, n, Boundary::Mirror);
+    plan.execute(c);
+    plan.execute(rf);
+    double peak = 0, err = 0;
+    for (std::size_t q = 0; q < c.data.size(); ++q) {
+      peak = std::max(peak, std::abs(c.data[q]));
+      err = std::max(err, std::abs(rf.data[q] - c.data[q]));
+    }
+    EXPECT_LT(err / peak, 2 * std::ldexp(1.0, -24)) << "degree " << d;
+  }
+}

@@ -1,0 +1,193 @@
+// sistability: where the methods fail, measured on synthetic inputs with
+// known answers (DESIGN.md section 6), as JSON for the report:
+//   noise     output noise variance over input noise variance per method and
+//             display, seeded white noise on the samples of a flat image, in
+//             units of sigma^2 / s^2 (a box average of a pixel's s^2 rays),
+//             with the theory of DESIGN.md section 6 beside it;
+//   step      overshoot and undershoot of a unit step edge per method;
+//   numerics  per degree 0..7: condition numbers, how much the prefilter
+//             amplifies a float rounding of its input, FFT against recursive.
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "sis/projection.h"
+#include "sis/range.h"
+
+using namespace sis;
+
+namespace {
+
+const double kPi = std::acos(-1.0);
+
+struct MethodSpec {
+  std::string name;
+  Kernel kernel;
+  Method method;
+  Display display;
+};
+
+std::vector<MethodSpec> methods() {
+  const Display c = Display::centred(), aa = Display::antialiased_2x2(), px = Display::pixel();
+  return {{"box", Kernel::bspline(0), Method::Conventional, c},
+          {"conv-tent", Kernel::bspline(1), Method::Conventional, c},
+          {"mitchell", Kernel::mitchell(), Method::Conventional, c},
+          {"me-tent", Kernel::bspline(1), Method::MinError, c},
+          {"me-tent-2x2", Kernel::bspline(1), Method::MinError, aa},
+          {"me-tent-pixel", Kernel::bspline(1), Method::MinError, px},
+          {"me-cubic", Kernel::bspline(3), Method::MinError, c},
+          {"me-cubic-2x2", Kernel::bspline(3), Method::MinError, aa},
+          {"me-cubic-pixel", Kernel::bspline(3), Method::MinError, px}};
+}
+
+// Per-axis noise gain of a min-error display: (1/pi) int_0^pi |D(w)|^2 / A(w)
+// with D the display's transfer function; squared for 2-D.
+double min_error_theory(int d, const Display& display) {
+  const int n = 4096;
+  double s = 0;
+  for (int i = 0; i < n; ++i) {
+    const double w = (i + 0.5) * kPi / n;
+    std::complex<double> D = 0;
+    if (display.mode == Display::Mode::PixelAverage) {
+      for (int k = -d - 2; k <= d + 2; ++k) D += bspline(d + 1, k) * std::polar(1.0, -w * k);
+    } else {
+      std::vector<double> dx;
+      for (const Vec2& o : display.offsets) dx.push_back(o.x);
+      std::sort(dx.begin(), dx.end());
+      dx.erase(std::unique(dx.begin(), dx.end()), dx.end());
+      for (double o : dx)
+        for (int k = -d - 2; k <= d + 2; ++k)
+          D += bspline(d, k + o) * std::polar(1.0, -w * k) / double(dx.size());
+    }
+    s += std::norm(D) / bspline_autocorrelation_spectrum(d, w);
+  }
+  return std::pow(s / n, 2);
+}
+
+// Conventional: s sum w^2 / (sum w)^2 per axis for the actual sample offsets.
+double conventional_theory(const Kernel& k, int s) {
+  double sw = 0, sw2 = 0;
+  for (int i = -8 * s; i < 8 * s; ++i) {
+    const double w = k.eval((i + 0.5) / s - 0.5);
+    sw += w;
+    sw2 += w * w;
+  }
+  return std::pow(s * sw2 / (sw * sw), 2);
+}
+
+double variance(const float* v, std::size_t n) {
+  double m = 0, q = 0;
+  for (std::size_t i = 0; i < n; ++i) m += v[i];
+  m /= n;
+  for (std::size_t i = 0; i < n; ++i) q += (v[i] - m) * (v[i] - m);
+  return q / (n - 1);
+}
+
+std::string num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  long N = 192;
+  int s = 4;
+  unsigned seed = 2026;
+  CLI::App app{"sistability: noise gain, step response and numerics of every method, as JSON",
+               "sistability"};
+  app.add_option("--size", N, "output size of the noise image (N x N)")->capture_default_str()->check(CLI::Range(16, 4096));
+  app.add_option("--factor", s, "supersampling factor of the noise image")->capture_default_str()->check(CLI::Range(1, 16));
+  app.add_option("--seed", seed, "noise seed")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  // Noise: a flat 0.5 image plus N(0, sigma^2) on every sample.
+  const double sigma = 0.1;
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0, float(sigma));
+  Image in(N * s, N * s, 1);
+  for (float& v : in.data) v = 0.5f + noise(rng);
+  const double unit = sigma * sigma / (s * s);
+  std::string out = "{\"noise\": {\"size\": " + std::to_string(N) + ", \"factor\": " + std::to_string(s) +
+                    ", \"seed\": " + std::to_string(seed) + ", \"sigma\": " + num(sigma) + ", \"methods\": [";
+  bool first = true;
+  for (const MethodSpec& m : methods()) {
+    ProjectionOptions o;
+    o.generator = m.kernel;
+    o.method = m.method;
+    o.boundary = Boundary::Periodic;
+    const Image p = final_image(project(in, N, N, o), m.display, N, N);
+    const double gain = variance(p.data.data(), p.data.size()) / unit;
+    const double theory = m.method == Method::MinError ? min_error_theory(m.kernel.degree(), m.display)
+                                                       : conventional_theory(m.kernel, s);
+    out += std::string(first ? "" : ", ") + "{\"method\": \"" + m.name + "\", \"gain\": " + num(gain) +
+           ", \"theory\": " + num(theory) + "}";
+    first = false;
+  }
+  out += "]}, \"step\": [";
+  // Step: conventional filters measured on a densely sampled step (s = 16,
+  // the edge on a pixel boundary); min-error from the exact step response.
+  first = true;
+  {
+    const long W = 64, S = 16;
+    Image step(W * S, 4 * S, 1);
+    for (long j = 0; j < step.height; ++j)
+      for (long i = 0; i < step.width; ++i) step.at(i, j, 0) = i >= W * S / 2 ? 1.0f : 0.0f;
+    for (const MethodSpec& m : methods()) {
+      double over = 0, under = 0;
+      if (m.method == Method::MinError) {
+        const StepResponse r = step_response(m.kernel.degree(), m.display);
+        over = r.overshoot;
+        under = r.undershoot;
+      } else {
+        ProjectionOptions o;
+        o.generator = m.kernel;
+        o.method = m.method;
+        const Image p = final_image(project(step, W, 4, o), m.display, W, 4);
+        for (long x = 0; x < W; ++x) {
+          over = std::max(over, double(p.at(x, 2, 0)) - 1);
+          under = std::max(under, -double(p.at(x, 2, 0)));
+        }
+      }
+      out += std::string(first ? "" : ", ") + "{\"method\": \"" + m.name + "\", \"overshoot\": " + num(over) +
+             ", \"undershoot\": " + num(under) + "}";
+      first = false;
+    }
+  }
+  out += "], \"numerics\": [";
+  // Numerics: zero-mean random r of a 256 x 256 grid (every frequency
+  // excited, the worst case for the conditioning); c from r in double, from
+  // r rounded to float, and by the recursive form.
+  for (int d = 0; d <= kMaxDegree; ++d) {
+    const long n = 256;
+    Grid<double> r(n, n, 1);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (double& v : r.data) v = u(rng);
+    Grid<double> rf = r, rec = r, c = r;
+    for (double& v : rf.data) v = static_cast<float>(v);
+    PrefilterPlan(d, n, n, Boundary::Mirror).execute(c);
+    PrefilterPlan(d, n, n, Boundary::Mirror).execute(rf);
+    PrefilterPlan(d, n, n, Boundary::Mirror, PrefilterMethod::Recursive).execute(rec);
+    double peak = 0, ef = 0, er = 0;
+    for (std::size_t q = 0; q < c.data.size(); ++q) {
+      peak = std::max(peak, std::abs(c.data[q]));
+      ef = std::max(ef, std::abs(rf.data[q] - c.data[q]));
+      er = std::max(er, std::abs(rec.data[q] - c.data[q]));
+    }
+    const double cond1 = 1 / bspline_autocorrelation_spectrum(d, kPi);
+    out += std::string(d ? ", " : "") + "{\"degree\": " + std::to_string(d) + ", \"condition_1d\": " + num(cond1) +
+           ", \"condition_2d\": " + num(cond1 * cond1) +
+           ", \"float_input_rel_error\": " + num(ef / peak) +
+           ", \"float_amplification\": " + num(ef / peak / std::ldexp(1.0, -24)) +
+           ", \"fft_vs_recursive_rel\": " + num(er / peak) + "}";
+  }
+  out += "]}\n";
+  std::fputs(out.c_str(), stdout);
+  return 0;
+}
