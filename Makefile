@@ -213,3 +213,10 @@ all-scenes: $(if $(PREBUILT),,build) $(foreach s,$(ALL_SCENES),$(call summary_of
 endif
 
 FORCE:
+
+# ---- stability: where the methods fail (scripts/stability.py) -----------------
+# make stability [QUICK=1]: out/report/stability/index.html, charts, JSON, CSV.
+PYTHON ?= .venv/bin/python
+.PHONY: stability
+stability: $(if $(PREBUILT),,build)
+	@$(PYTHON) scripts/stability.py --build $(BUILD) --out $(OUT)/report/stability $(if $(QUICK),--quick)

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# stability_quick.sh SOURCE_DIR BUILD_DIR
+#
+# End-to-end test of the stability study (ctest label e2e): runs
+# scripts/stability.py --quick into a temporary folder and checks that every
+# file the page names exists, that every method has finite numbers, that the
+# noise gains are within 15 % of theory (the quick image is small: 64 x 64,
+# so the variance estimate itself scatters by a few per cent), and that on the
+# HDR scene clamping at zero leaves no negative pixel while the plain
+# min-error cubic has some.
+set -euo pipefail
+[ $# -eq 2 ] || { echo "usage: ${0##*/} SOURCE_DIR BUILD_DIR" >&2; exit 64; }
+src=$1 build=$2
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/sis-stability.XXXXXX")
+trap 'rm -rf -- "$tmp"' EXIT
+"$src/.venv/bin/python" "$src/scripts/stability.py" --quick --build "$build" --out "$tmp/report/stability"
+"$src/.venv/bin/python" - "$tmp/report/stability" <<'PY'
+import json, math, os, re, sys
+d = sys.argv[1]
+page = open(os.path.join(d, "index.html")).read()
+names = set(re.findall(r'(?:src|href)="([^"#]+)"', page))
+missing = [n for n in names if not os.path.exists(os.path.join(d, n))]
+assert not missing, f"the page names missing files: {missing}"
+r = json.load(open(os.path.join(d, "stability.json")))
+def finite(x):
+    if isinstance(x, dict): return all(finite(v) for v in x.values())
+    if isinstance(x, list): return all(finite(v) for v in x)
+    return not isinstance(x, float) or math.isfinite(x)
+assert finite(r), "a number is not finite"
+methods = {"box", "conv-tent", "mitchell", "me-tent", "me-cubic", "me-tent-2x2", "me-cubic-2x2"}
+assert {e["method"] for e in r["edges"]} == methods, "edges: a method is missing"
+for n in r["synthetic"]["noise"]["methods"]:
+    assert abs(n["gain"] / n["theory"] - 1) < 0.15, f"noise gain off theory: {n}"
+hdr = {(h["method"], h["remedy"]): h for h in r["hdr"]}
+assert hdr[("me-cubic", "none")]["negative_pixels"] > 0, "plain min-error cubic shows no negatives"
+assert hdr[("me-cubic", "clamp zero")]["negative_pixels"] == 0, "clamp zero left negatives"
+print(f"ok: {len(names)} files named, all present; {len(r['hdr'])} HDR rows")
+PY
