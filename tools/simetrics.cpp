@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "sis/imageio.h"
+#include "sis/hex_lattice.h"
 #include "sis/metrics.h"
 
 using namespace sis;
@@ -216,7 +217,7 @@ int run(const Options& o) {
     Report inner;
     inner.string("coeffs", o.coeffs);
     inner.string("method", k.min_error ? "min-error" : "conventional");
-    inner.string("generator", k.generator.name());
+    inner.string("generator", generator_name(k));
     inner.number("border", o.border);
     if (!o.truth.empty()) {
       const Image truth = read_finite(o.truth);

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <thread>
 
+#include "sis/hex_projection.h"
 #include "sis/imageio.h"
 #include "sis/projection.h"
 #include "sis/range.h"
@@ -39,6 +40,9 @@ struct Options {
   std::string generator = "cubic", method = "min-error", display, boundary = "mirror";
   std::string nonfinite = "error", prefilter = "fft", clamp = "none";
   bool highlight_compress = false;
+  std::string lattice = "cartesian", quadrature = "point";
+  double density = 1.0;
+  bool lattice_given = false, density_given = false, quadrature_given = false;
   int threads = 0;
   bool verbose = false, quiet = false;
   bool generator_given = false, method_given = false, boundary_given = false;
@@ -96,7 +100,30 @@ int run(const Options& o) {
   if (o.factor != 0 && !o.size.empty()) throw UsageError("give --factor or --size, not both");
   std::pair<long, long> size{0, 0};
   if (!o.size.empty()) size = parse_size(o.size);
+  const bool hex = o.lattice == "hex";
+  if (!hex && o.lattice != "cartesian")
+    throw UsageError("--lattice '" + o.lattice + "': expected cartesian or hex");
+  if (!hex && o.density_given) throw UsageError("--density applies to --lattice hex only");
+  if (!hex && o.quadrature_given)
+    throw UsageError("--quadrature applies to --lattice hex only");
+  HexQuadrature quadrature;
+  try {
+    quadrature = parse_hex_quadrature(o.quadrature);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--quadrature: ") + e.what());
+  }
+  if (!hex && o.generator.rfind("hex-", 0) == 0)
+    throw UsageError("--generator " + o.generator + " needs --lattice hex");
+  const int hex_order = [&] {
+    if (!hex) return 0;
+    try {
+      return BoxSpline::parse(o.generator_given ? o.generator : "hex-quartic").order();
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--lattice hex: ") + e.what());
+    }
+  }();
   const Kernel generator = [&] {
+    if (hex) return hex_generator_kernel(hex_order);
     try {
       return Kernel::parse(o.generator);
     } catch (const std::invalid_argument& e) {
@@ -126,6 +153,9 @@ int run(const Options& o) {
     throw UsageError("--nonfinite '" + o.nonfinite + "': expected error or zero");
   if (o.prefilter != "fft" && o.prefilter != "recursive")
     throw UsageError("--prefilter '" + o.prefilter + "': expected fft or recursive");
+  if (hex && method != Method::MinError)
+    throw UsageError("--lattice hex has the min-error method only");
+  if (hex && o.prefilter != "fft") throw UsageError("--lattice hex has the fft prefilter only");
   for (const std::string& in : o.inputs) {
     if (same_file(in, o.output)) throw UsageError("-o " + o.output + " is the input file");
     if (!o.coeffs.empty() && same_file(in, o.coeffs))
@@ -212,18 +242,37 @@ int run(const Options& o) {
                        "--boundary and --highlight-compress");
     if (clamp == Clamp::Local)
       throw UsageError("--clamp local needs the input samples; " + reader.path() + " is a coefficient file");
+    if (o.lattice_given || o.density_given || o.quadrature_given)
+      throw UsageError(reader.path() + " is a coefficient file: its lattice is recorded in it; "
+                       "drop --lattice, --density and --quadrature");
     compressed = reader.attribute("sis:highlight_compress") == "1";
     const auto t = Clock::now();
     k = read_coefficients(reader);
     t_acquire = seconds_since(t);
-    std::tie(W, H) = out_size(k.c.width, k.c.height);
+    // its own size is its frame's (a hexagonal grid also covers a margin)
+    if (k.lattice.is_hexagonal())
+      std::tie(W, H) = out_size(std::lround(k.image_width), std::lround(k.image_height));
+    else
+      std::tie(W, H) = out_size(k.c.width, k.c.height);
   } else {
     if (o.factor == 0 && !size.first)
       throw UsageError("give the output size: --factor S (output = input / S) or --size WxH");
     std::tie(W, H) = out_size(win, hin);
-    const AcquisitionPlan plan(win, hin, C, double(W), double(H), Lattice::cartesian(), generator,
-                               boundary, method);
-    Acquisition acquisition(plan, threads);
+    std::unique_ptr<AcquisitionPlan> plan;
+    std::unique_ptr<Acquisition> cartesian;
+    std::unique_ptr<HexAcquisitionPlan> hex_plan;
+    std::unique_ptr<HexAcquisition> hexagonal;
+    if (hex) {
+      const HexLayout layout =
+          hex_layout(o.density, double(W), double(H), hex_default_margin(hex_order));
+      hex_plan = std::make_unique<HexAcquisitionPlan>(win, hin, C, double(W), double(H), layout,
+                                                      hex_order, boundary, quadrature);
+      hexagonal = std::make_unique<HexAcquisition>(*hex_plan, threads);
+    } else {
+      plan = std::make_unique<AcquisitionPlan>(win, hin, C, double(W), double(H),
+                                               Lattice::cartesian(), generator, boundary, method);
+      cartesian = std::make_unique<Acquisition>(*plan, threads);
+    }
     local = std::make_unique<LocalRange>(win, hin, C, W, H);
     // The rows as chunks of the bands (one band for one input), in order.
     struct Chunk {
@@ -279,7 +328,10 @@ int run(const Options& o) {
         }
         local->add_rows(y, y1, data);
         if (compressed) for_colour(data, n, highlight_compress);
-        acquisition.add_rows(y, y1, data);
+        if (hex)
+          hexagonal->add_rows(y, y1, data);
+        else
+          cartesian->add_rows(y, y1, data);
         progress.update(double(y1) / hin);
       }
       t_acquire = seconds_since(t);
@@ -294,7 +346,7 @@ int run(const Options& o) {
       }
       if (!o.quiet) std::cerr << "siproject: warning: replaced " << nonfinite << " non-finite samples with 0; first: " << m.str() << "\n";
     }
-    k = acquisition.finish();
+    k = hex ? hexagonal->finish() : cartesian->finish();
     const auto t = Clock::now();
     prefilter(k, threads, o.prefilter == "fft" ? PrefilterMethod::FFT : PrefilterMethod::Recursive);
     t_prefilter = seconds_since(t);
@@ -315,7 +367,7 @@ int run(const Options& o) {
 
   const Metadata md = {
       {"sis:method", k.min_error ? "min-error" : "conventional"},
-      {"sis:generator", k.generator.name()},
+      {"sis:generator", generator_name(k)},
       {"sis:display", shown.name()},
       {"sis:boundary", boundary_name(k.boundary)},
       {"sis:input", fs::path(reader.path()).filename().string() +
@@ -327,6 +379,7 @@ int run(const Options& o) {
       {"sis:negative_before_clamp", std::to_string(before.negative)},
       {"sis:out_of_range_before_clamp",
        own_range ? std::to_string(before.out_of_range) : std::string("unknown")},
+      {"sis:lattice", k.lattice.is_hexagonal() ? "hexagonal" : "cartesian"},
       {"Software", "siproject"},
   };
   t = Clock::now();
@@ -342,8 +395,15 @@ int run(const Options& o) {
                  "siproject: read+acquire %.3f s, prefilter %.3f s, resample %.3f s, write %.3f s, "
                  "total %.3f s\n",
                  win, hin, C, W, H, k.min_error ? "min-error" : "conventional",
-                 k.generator.name().c_str(), shown.name().c_str(), boundary_name(k.boundary).c_str(),
+                 generator_name(k).c_str(), shown.name().c_str(), boundary_name(k.boundary).c_str(),
                  threads, t_acquire, t_prefilter, t_resample, t_write, seconds_since(t_start));
+    if (k.lattice.is_hexagonal())
+      std::fprintf(stderr,
+                   "siproject: hexagonal lattice, %.6g points per output pixel (step %.6g), "
+                   "%ld x %ld offset-row coefficients over the frame and its margin%s\n",
+                   1.0 / std::abs(k.lattice.determinant()), k.lattice.matrix()[0], k.c.width,
+                   k.c.height,
+                   local ? (", " + hex_quadrature_name(quadrature) + " quadrature").c_str() : "");
     std::fprintf(stderr, "siproject: output range [%g, %g], %ld negative samples", before.min,
                  before.max, before.negative);
     if (own_range)
@@ -383,7 +443,21 @@ int main(int argc, char** argv) {
   app.add_option("--size", o.size, "output size WxH (any ratio to the input)");
   auto* g = app.add_option("--generator", o.generator,
                            "box, tent, quadratic, cubic, bspline:N (N = 0..7), mitchell, gaussian, "
-                           "catmull-rom, lanczos3")->capture_default_str();
+                           "catmull-rom, lanczos3; with --lattice hex: hex-hat or hex-quartic "
+                           "(the default there)")->capture_default_str();
+  auto* lat = app.add_option("--lattice", o.lattice,
+                             "cartesian (coefficients on the output pixels) or hex (a hexagonal "
+                             "lattice, min-error, resampled to the output pixels)")
+                  ->capture_default_str();
+  auto* quad = app.add_option("--quadrature", o.quadrature,
+                              "--lattice hex: the inner products from the samples: point (each "
+                              "sample a point, as on the Cartesian lattice) or cell (each sample "
+                              "the value over its cell: flat areas exact at any sampling, a "
+                              "slight blur; better with hex-hat)")
+                   ->capture_default_str();
+  auto* dens = app.add_option("--density", o.density,
+                              "--lattice hex: lattice points per output pixel")
+                   ->check(CLI::PositiveNumber)->capture_default_str();
   auto* m = app.add_option("--method", o.method,
                            "min-error (orthogonal projection, B-spline generators) or conventional "
                            "(normalised weighted average, any generator)")->capture_default_str();
@@ -418,6 +492,9 @@ int main(int argc, char** argv) {
   o.generator_given = g->count() > 0;
   o.method_given = m->count() > 0;
   o.boundary_given = b->count() > 0;
+  o.lattice_given = lat->count() > 0;
+  o.density_given = dens->count() > 0;
+  o.quadrature_given = quad->count() > 0;
   // A conventional filter named alone means the conventional method.
   if (o.generator_given && !o.method_given) {
     try {

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <sstream>
 
+#include "sis/hex_lattice.h"
+
 namespace sis {
 
 namespace fs = std::filesystem;
@@ -198,10 +200,15 @@ void write_coefficients(const std::string& path, const Coefficients& k,
   const auto& L = k.lattice.matrix();
   Metadata md = {
       {"sis:coefficients", "1"},
-      {"sis:lattice", k.lattice.separable() ? "cartesian" : "general"},
+      {"sis:lattice", k.lattice.separable()      ? "cartesian"
+                      : k.lattice.is_hexagonal() ? "hexagonal"
+                                                 : "general"},
+      // rows: c(i, j) at o + L (i, j); offset-rows (sis/hex_lattice.h): at
+      // o + h (i + (j mod 2)/2, (sqrt(3)/2) j), periodic on the grid
+      {"sis:storage", k.lattice.is_hexagonal() ? "offset-rows" : "rows"},
       {"sis:lattice_origin", num(o.x) + " " + num(o.y)},
       {"sis:lattice_matrix", num(L[0]) + " " + num(L[1]) + " " + num(L[2]) + " " + num(L[3])},
-      {"sis:generator", k.generator.name()},
+      {"sis:generator", generator_name(k)},
       {"sis:degree", std::to_string(k.generator.degree())},
       {"sis:boundary", boundary_name(k.boundary)},
       {"sis:method", k.min_error ? "min-error" : "conventional"},
@@ -229,7 +236,14 @@ Coefficients read_coefficients(ImageReader& r) {
     const auto o = numbers("sis:lattice_origin", 2);
     const auto L = numbers("sis:lattice_matrix", 4);
     k.lattice = Lattice({o[0], o[1]}, {L[0], L[1], L[2], L[3]});
-    k.generator = Kernel::parse(r.attribute("sis:generator"));
+    if (k.lattice.is_hexagonal() || r.attribute("sis:lattice") == "hexagonal") {
+      if (!k.lattice.is_hexagonal() || r.attribute("sis:storage") != "offset-rows")
+        throw std::invalid_argument("a hexagonal lattice needs a hexagonal matrix and "
+                                    "sis:storage offset-rows");
+      k.generator = hex_generator_kernel(BoxSpline::parse(r.attribute("sis:generator")).order());
+    } else {
+      k.generator = Kernel::parse(r.attribute("sis:generator"));
+    }
     k.boundary = parse_boundary(r.attribute("sis:boundary"));
     k.min_error = r.attribute("sis:method") != "conventional";
     k.image_width = numbers("sis:image_width", 1)[0];
@@ -242,6 +256,13 @@ Coefficients read_coefficients(ImageReader& r) {
     r.read_rows(y, std::min(r.height(), y + r.preferred_strip()), grid.row(y));
   k.c = Grid<double>(grid.width, grid.height, grid.channels);
   for (std::size_t q = 0; q < grid.data.size(); ++q) k.c.data[q] = grid.data[q];
+  if (k.lattice.is_hexagonal()) {
+    try {
+      hex_layout(k);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(r.path() + ": " + e.what());
+    }
+  }
   if (k.lattice.separable()) {
     const auto e = k.lattice.extent(k.image_width, k.image_height);
     if (e[0] != k.c.width || e[1] != k.c.height)

@@ -17,6 +17,20 @@ Lattice Lattice::cartesian(double hx, double hy) {
   return Lattice({0.5 * hx, 0.5 * hy}, {hx, 0.0, 0.0, hy});
 }
 
+Lattice Lattice::hexagonal(double density, Vec2 origin) {
+  if (!(density > 0) || !std::isfinite(density))
+    throw std::invalid_argument("Lattice::hexagonal(): density " + std::to_string(density) +
+                                " must be positive");
+  const double h = std::sqrt(2.0 / (std::sqrt(3.0) * density));
+  return Lattice(origin, {h, 0.5 * h, 0.0, 0.5 * std::sqrt(3.0) * h});
+}
+
+bool Lattice::is_hexagonal() const {
+  const double h = L_[0];
+  return h > 0 && L_[2] == 0.0 && std::abs(L_[1] - 0.5 * h) <= 1e-12 * h &&
+         std::abs(L_[3] - 0.5 * std::sqrt(3.0) * h) <= 1e-12 * h;
+}
+
 Vec2 Lattice::position(double n1, double n2) const {
   return {origin_.x + L_[0] * n1 + L_[1] * n2, origin_.y + L_[2] * n1 + L_[3] * n2};
 }
@@ -47,7 +61,8 @@ std::array<long, 2> Lattice::extent(double width, double height) const {
 std::string Lattice::description() const {
   std::ostringstream s;
   s.precision(17);
-  s << (separable() ? "cartesian" : "general") << " origin " << origin_.x << " " << origin_.y
+  s << (separable() ? "cartesian" : is_hexagonal() ? "hexagonal" : "general") << " origin "
+    << origin_.x << " " << origin_.y
     << " matrix " << L_[0] << " " << L_[1] << " " << L_[2] << " " << L_[3];
   return s.str();
 }

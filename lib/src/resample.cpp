@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sis/hex_resample.h"
 #include "sis/weights.h"
 
 namespace sis {
@@ -135,6 +136,7 @@ void apply_separable(const Grid<double>& c, const AxisWeights& wx, const AxisWei
 }  // namespace
 
 double evaluate(const Coefficients& k, Vec2 x, int channel) {
+  if (k.lattice.is_hexagonal()) return hex_evaluate(k, x, channel);
   check_separable(k, "evaluate");
   const Kernel& phi = k.generator;
   const double hx = k.lattice.axis_step(0), hy = k.lattice.axis_step(1);
@@ -159,6 +161,7 @@ double evaluate(const Coefficients& k, Vec2 x, int channel) {
 
 Image resample(const Coefficients& k, const Display& display, long out_width, long out_height,
                int threads) {
+  if (k.lattice.is_hexagonal()) return hex_resample(k, display, out_width, out_height, threads);
   check_separable(k, "resample");
   if (out_width < 1 || out_height < 1) {
     std::ostringstream m;

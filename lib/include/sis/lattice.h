@@ -20,6 +20,12 @@ class Lattice {
   // first cell: (hx/2, hy/2). With hx = hy = 1 coefficient n sits on pixel
   // centre n + 1/2.
   static Lattice cartesian(double hx = 1.0, double hy = 1.0);
+  // The hexagonal lattice of `density` points per output pixel:
+  // L = h [[1, 1/2], [0, sqrt(3)/2]], h = sqrt(2 / (sqrt(3) density)), so
+  // det L = 1 / density. Rows of points are horizontal; each row is shifted
+  // by h/2 from the one above. hex_layout() (sis/hex_lattice.h) places it on a
+  // frame.
+  static Lattice hexagonal(double density = 1.0, Vec2 origin = {0.0, 0.0});
 
   Vec2 origin() const { return origin_; }
   const std::array<double, 4>& matrix() const { return L_; }
@@ -32,6 +38,9 @@ class Lattice {
 
   // True when L is diagonal: positions factor per axis.
   bool separable() const { return L_[1] == 0.0 && L_[2] == 0.0; }
+  // True when L has the form of hexagonal(): L10 = 0, L01 = L00/2,
+  // L11 = L00 sqrt(3)/2 (to 1e-12 relative).
+  bool is_hexagonal() const;
   // Per-axis position of index n (separable lattices only; axis 0 = x).
   double axis_position(int axis, double n) const;
   double axis_step(int axis) const { return axis == 0 ? L_[0] : L_[3]; }

@@ -1,0 +1,105 @@
+#pragma once
+// Analog acquisition on the hexagonal lattice: the inner products
+// r[n] = <f, phi(. - x_n)> / |det L| for every stored coefficient of a
+// HexLayout (margin included), from point samples of a supersampled image:
+//   r[n] = (dx dy / |det L|) sum_q f_q M_n(L^{-1} (x_q - x_n)),
+// over every sample of the boundary-extended image in the support. Samples as
+// in acquisition.h: input sample (i, j) of a W_in x H_in image covering
+// image_width x image_height output pixels sits at ((i + 1/2) dx, (j + 1/2) dy),
+// dx = image_width / W_in. The weight dx dy / |det L| normalises the Gram to
+// the lattice (a[0] = 1/2 for the hat), as on the Cartesian lattice.
+//
+// Quadrature: a square sample grid is incommensurate with the hexagonal
+// lattice, so unlike the Cartesian case the plain sum is not exact for
+// polynomials: its error falls like (dx/h)^2 for the hat and (dx/h)^4 for the
+// quartic (the smoothness of M_n across its knot lines). It is exact for
+// f of degree < 2n when dx = h / s1 with s1 even and dy = (sqrt(3)/2) h / s2:
+// then M_n's transform vanishes to order 2n on the whole dual of the sample
+// grid but 0.
+//
+// HexQuadrature::Cell instead takes each sample as the value of f over its
+// cell [i dx, (i+1) dx] x [j dy, (j+1) dy] and integrates that piecewise
+// constant image against phi exactly (BoxSplineBand): exact for constant and
+// linear f whatever the ratio of the grids (no ripple on flat areas), at the
+// price of a smooth bias -(dx^2 f_xx + dy^2 f_yy) / 24 where f curves.
+//
+// Rows stream through: each input row is read once and added to every
+// coefficient whose support holds it or one of its boundary images.
+#include <string>
+#include <vector>
+
+#include "sis/hex_lattice.h"
+
+namespace sis {
+
+enum class HexQuadrature {
+  Point,  // r[n] = (dx dy / |det L|) sum_q f_q phi(x_q - x_n), as on the Cartesian lattice
+  Cell,   // r[n] = sum_q f_q int_{cell q} phi(x - x_n) dx / |det L|
+};
+HexQuadrature parse_hex_quadrature(const std::string& spelling);  // "point" | "cell"
+std::string hex_quadrature_name(HexQuadrature q);
+
+class HexAcquisitionPlan {
+ public:
+  HexAcquisitionPlan(long input_width, long input_height, int channels, double image_width,
+                     double image_height, const HexLayout& layout, int order, Boundary boundary,
+                     HexQuadrature quadrature = HexQuadrature::Point);
+
+  long input_width() const { return win_; }
+  long input_height() const { return hin_; }
+  int channels() const { return channels_; }
+  const HexLayout& layout() const { return layout_; }
+  const BoxSpline& generator() const { return *spline_; }
+  Boundary boundary() const { return boundary_; }
+  HexQuadrature quadrature() const { return quadrature_; }
+  double image_width() const { return image_w_; }
+  double image_height() const { return image_h_; }
+  double sample_dx() const { return dx_; }
+  double sample_dy() const { return dy_; }
+  double quadrature_weight() const { return scale_; }  // dx dy / |det L|
+  // First extended column and the source column of each extended column.
+  long first_column() const { return q0_; }
+  const std::vector<long>& column_source() const { return colmap_; }
+  // Extended rows (boundary images) of input row k, increasing.
+  const std::vector<long>& row_images(long k) const { return images_[k]; }
+
+ private:
+  long win_, hin_;
+  int channels_;
+  double image_w_, image_h_, dx_, dy_, scale_;
+  HexLayout layout_;
+  const BoxSpline* spline_;
+  Boundary boundary_;
+  HexQuadrature quadrature_;
+  long q0_ = 0;
+  std::vector<long> colmap_;
+  std::vector<std::vector<long>> images_;
+};
+
+// Streams rows through a plan. Rows must arrive in order, each once. The
+// result does not depend on the strip sizes or the thread count.
+class HexAcquisition {
+ public:
+  explicit HexAcquisition(const HexAcquisitionPlan& plan, int threads = 1);
+  // Rows [y0, y1) of the input, interleaved, W_in * channels per row.
+  void add_rows(long y0, long y1, const float* rows);
+  void add_rows(long y0, long y1, const double* rows);
+  long next_row() const { return next_row_; }
+  // The acquired r[n] (sis/hex_lattice.h says how Coefficients records them).
+  Coefficients finish();
+
+ private:
+  const HexAcquisitionPlan& plan_;
+  int threads_;
+  long next_row_ = 0;
+  Grid<double> acc_;
+  std::vector<double> strip_;  // the current strip, extended along x
+  template <typename T>
+  void add(long y0, long y1, const T* rows);
+};
+
+// Convenience: acquires a whole in-memory image.
+Coefficients acquire(const Image& input, const HexAcquisitionPlan& plan, int threads = 1);
+Coefficients acquire(const Grid<double>& input, const HexAcquisitionPlan& plan, int threads = 1);
+
+}  // namespace sis

@@ -1,0 +1,242 @@
+#include "sis/hex_acquisition.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <type_traits>
+
+#include "sis/weights.h"
+
+namespace sis {
+
+HexQuadrature parse_hex_quadrature(const std::string& s) {
+  if (s == "point") return HexQuadrature::Point;
+  if (s == "cell") return HexQuadrature::Cell;
+  throw std::invalid_argument("unknown quadrature '" + s + "' (expected point or cell)");
+}
+
+std::string hex_quadrature_name(HexQuadrature q) {
+  return q == HexQuadrature::Point ? "point" : "cell";
+}
+
+HexAcquisitionPlan::HexAcquisitionPlan(long input_width, long input_height, int channels,
+                                       double image_width, double image_height,
+                                       const HexLayout& layout, int order, Boundary boundary,
+                                       HexQuadrature quadrature)
+    : win_(input_width),
+      hin_(input_height),
+      channels_(channels),
+      image_w_(image_width),
+      image_h_(image_height),
+      layout_(layout),
+      spline_(&BoxSpline::hexagonal(order)),
+      boundary_(boundary),
+      quadrature_(quadrature) {
+  if (input_width < 1 || input_height < 1 || channels < 1 || !(image_width > 0) ||
+      !(image_height > 0)) {
+    std::ostringstream m;
+    m << "HexAcquisitionPlan(): empty input " << input_width << " x " << input_height << " x "
+      << channels << " or frame " << image_width << " x " << image_height;
+    throw std::invalid_argument(m.str());
+  }
+  if (!layout.lattice.is_hexagonal() || layout.columns < 1 || layout.rows < 2 ||
+      layout.rows % 2 != 0)
+    throw std::invalid_argument("HexAcquisitionPlan(): layout is not an offset-row grid on a "
+                                "hexagonal lattice");
+  dx_ = image_width / input_width;
+  dy_ = image_height / input_height;
+  scale_ = dx_ * dy_ / std::abs(layout.lattice.determinant());
+  const double n = spline_->radius(), h = layout.step(), hy = layout.row_step();
+  const Vec2 o = layout.lattice.origin();
+  // Extended columns: every sample (with the cell rule: every cell) meeting
+  // some coefficient's support.
+  const bool cell = quadrature == HexQuadrature::Cell;
+  const double rx = n * h + (cell ? 0.5 * dx_ : 0.0), ry = n * hy + (cell ? 0.5 * dy_ : 0.0);
+  const double xmin = o.x - rx, xmax = o.x + h * (layout.columns - 0.5) + rx;
+  q0_ = static_cast<long>(std::ceil(xmin / dx_ - 0.5));
+  const long q1 = static_cast<long>(std::floor(xmax / dx_ - 0.5));
+  for (long q = q0_; q <= q1; ++q) colmap_.push_back(extend_index(q, win_, boundary));
+  // Extended rows, grouped by the input row they copy.
+  const double ymin = o.y - ry, ymax = o.y + hy * (layout.rows - 1) + ry;
+  const long e0 = static_cast<long>(std::ceil(ymin / dy_ - 0.5));
+  const long e1 = static_cast<long>(std::floor(ymax / dy_ - 0.5));
+  images_.resize(hin_);
+  for (long e = e0; e <= e1; ++e) images_[extend_index(e, hin_, boundary)].push_back(e);
+}
+
+HexAcquisition::HexAcquisition(const HexAcquisitionPlan& plan, int threads)
+    : plan_(plan),
+      threads_(threads < 1 ? 1 : threads),
+      acc_(plan.layout().columns, plan.layout().rows, plan.channels()) {}
+
+void HexAcquisition::add_rows(long y0, long y1, const float* rows) { add(y0, y1, rows); }
+void HexAcquisition::add_rows(long y0, long y1, const double* rows) { add(y0, y1, rows); }
+
+template <typename T>
+void HexAcquisition::add(long y0, long y1, const T* rows) {
+  if (y0 != next_row_ || y1 < y0 || y1 > plan_.input_height()) {
+    std::ostringstream m;
+    m << "HexAcquisition::add_rows(): rows [" << y0 << ", " << y1 << ") out of order (next row "
+      << next_row_ << " of " << plan_.input_height() << ")";
+    throw std::logic_error(m.str());
+  }
+  const HexLayout& L = plan_.layout();
+  const BoxSpline& B = plan_.generator();
+  const int C = plan_.channels();
+  const long win = plan_.input_width(), Q = L.columns, R = L.rows;
+  const double n = B.radius(), h = L.step(), hy = L.row_step(), dx = plan_.sample_dx(),
+               dy = plan_.sample_dy(), scale = plan_.quadrature_weight();
+  const Vec2 o = L.lattice.origin();
+  const long q0 = plan_.first_column();
+  const std::vector<long>& colmap = plan_.column_source();
+  const long qlast = q0 + static_cast<long>(colmap.size()) - 1;
+
+  // Half a cell in steps and rows (cell rule), zero for the point rule.
+  const bool cell = plan_.quadrature() == HexQuadrature::Cell;
+  const double ct = cell ? 0.5 * dx / h : 0.0, cv = cell ? 0.5 * dy / hy : 0.0;
+
+  // The coefficient rows this strip reaches, in increasing order.
+  std::vector<char> touched(R, 0);
+  for (long k = y0; k < y1; ++k)
+    for (long e : plan_.row_images(k)) {
+      const double u = ((e + 0.5) * dy - o.y) / hy;
+      const long j0 = std::max(0L, static_cast<long>(std::floor(u - n - cv)));
+      const long j1 = std::min(R - 1, static_cast<long>(std::ceil(u + n + cv)));
+      for (long j = j0; j <= j1; ++j) touched[j] = 1;
+    }
+  std::vector<long> work;
+  for (long j = 0; j < R; ++j)
+    if (touched[j]) work.push_back(j);
+
+  // The strip's rows extended along x by the boundary rule, in double.
+  const long wext = static_cast<long>(colmap.size());
+  const std::size_t erow = std::size_t(wext) * C;
+  strip_.resize(erow * (y1 - y0));
+  parallel_for(y1 - y0, threads_, [&](long r0, long r1) {
+    for (long r = r0; r < r1; ++r) {
+      const T* in = rows + std::size_t(r) * win * C;
+      double* out = strip_.data() + erow * r;
+      for (long q = 0; q < wext; ++q)
+        for (int c = 0; c < C; ++c)
+          out[std::size_t(q) * C + c] = in[std::size_t(colmap[q]) * C + c];
+    }
+  });
+
+  // Each coefficient row adds the strip's rows (and their boundary images) in
+  // its support, in order; a fixed channel count lets the inner loop unroll.
+  auto rows_into = [&](auto channels) {
+    constexpr int CC = decltype(channels)::value;
+    const int Cn = CC > 0 ? CC : C;
+    parallel_for(static_cast<long>(work.size()), threads_, [&](long w0, long w1) {
+      BoxSplineSlice s;
+      BoxSplineBand band;
+      const double inv_h = 1.0 / h, step = dx / h;
+      for (long w = w0; w < w1; ++w) {
+        const long j = work[w];
+        double* acc = acc_.row(j);
+        const double yj = o.y + hy * j, xj = o.x + 0.5 * h * double(j & 1);
+        for (long k = y0; k < y1; ++k) {
+          const double* ext = strip_.data() + erow * (k - y0);
+          for (long e : plan_.row_images(k)) {
+            const double v = ((e + 0.5) * dy - yj) / hy;
+            if (cell) {
+              // weight of sample q: the integral of M over its cell in (t, v),
+              // Y(right edge) - Y(left edge) of the band [v - cv, v + cv]
+              if (!(std::abs(v) < n + cv)) continue;
+              band.build(B, v - cv, v + cv);
+              if (band.empty()) continue;
+              const double reach = (n + ct) * h;
+              for (long i = 0; i < Q; ++i) {
+                const double xn = xj + h * i;
+                const long qa = std::max(q0, static_cast<long>(std::ceil((xn - reach) / dx - 0.5)));
+                const long qb =
+                    std::min(qlast, static_cast<long>(std::floor((xn + reach) / dx - 0.5)));
+                double* a = acc + std::size_t(i) * Cn;
+                double t = (qa * dx - xn) * inv_h;  // left edge of cell qa
+                std::size_t hint = 0;
+                double left = band.antiderivative(t, hint);
+                for (long q = qa; q <= qb; ++q) {
+                  t += step;
+                  const double right = band.antiderivative(t, hint);
+                  const double wgt = right - left;
+                  left = right;
+                  const double* src = ext + std::size_t(q - q0) * Cn;
+                  for (int c = 0; c < Cn; ++c) a[c] += wgt * src[c];
+                }
+              }
+              continue;
+            }
+            if (!(std::abs(v) < n)) continue;
+            B.slice(v, s);
+            const double reach = s.half_width * h, hw = s.half_width;
+            for (long i = 0; i < Q; ++i) {
+              const double xn = xj + h * i;
+              const long qa = std::max(q0, static_cast<long>(std::ceil((xn - reach) / dx - 0.5)));
+              const long qb =
+                  std::min(qlast, static_cast<long>(std::floor((xn + reach) / dx - 0.5)));
+              double* a = acc + std::size_t(i) * Cn;
+              double t = ((qa + 0.5) * dx - xn) * inv_h;
+              int p = 0;
+              for (long q = qa; q <= qb; ++q, t += step) {
+                if (!(std::abs(t) < hw)) continue;
+                p = s.piece(t, p);
+                const double wgt = scale * s.eval_piece(p, t);
+                const double* src = ext + std::size_t(q - q0) * Cn;
+                for (int c = 0; c < Cn; ++c) a[c] += wgt * src[c];
+              }
+            }
+          }
+        }
+      }
+    });
+  };
+  switch (C) {
+    case 1: rows_into(std::integral_constant<int, 1>()); break;
+    case 3: rows_into(std::integral_constant<int, 3>()); break;
+    case 4: rows_into(std::integral_constant<int, 4>()); break;
+    default: rows_into(std::integral_constant<int, 0>()); break;
+  }
+  next_row_ = y1;
+}
+
+Coefficients HexAcquisition::finish() {
+  if (next_row_ != plan_.input_height()) {
+    std::ostringstream m;
+    m << "HexAcquisition::finish(): only " << next_row_ << " of " << plan_.input_height()
+      << " rows were added";
+    throw std::logic_error(m.str());
+  }
+  Coefficients out;
+  out.c = std::move(acc_);
+  out.lattice = plan_.layout().lattice;
+  out.generator = hex_generator_kernel(plan_.generator().order());
+  out.boundary = plan_.boundary();
+  out.min_error = true;
+  out.image_width = plan_.image_width();
+  out.image_height = plan_.image_height();
+  return out;
+}
+
+namespace {
+template <typename T>
+Coefficients acquire_grid(const Grid<T>& input, const HexAcquisitionPlan& plan, int threads) {
+  if (input.width != plan.input_width() || input.height != plan.input_height() ||
+      input.channels != plan.channels())
+    throw std::invalid_argument("acquire(): image size does not match the hexagonal plan");
+  HexAcquisition a(plan, threads);
+  const long strip = 64;
+  for (long y = 0; y < input.height; y += strip)
+    a.add_rows(y, std::min(input.height, y + strip), input.row(y));
+  return a.finish();
+}
+}  // namespace
+
+Coefficients acquire(const Image& input, const HexAcquisitionPlan& plan, int threads) {
+  return acquire_grid(input, plan, threads);
+}
+Coefficients acquire(const Grid<double>& input, const HexAcquisitionPlan& plan, int threads) {
+  return acquire_grid(input, plan, threads);
+}
+
+}  // namespace sis

@@ -1,0 +1,417 @@
+// The hexagonal lattice end to end in the library (DESIGN.md section 7):
+// lattice and layout, acquisition against a slow direct sum, polynomial
+// reproduction, approximation order, the seam of the periodic grid, the
+// quadrature of square samples, and the display modes against direct
+// evaluation.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include "sis/hex_projection.h"
+#include "sis/projection.h"
+
+using namespace sis;
+
+namespace {
+
+const double kPi = std::acos(-1.0);
+const Boundary kRules[] = {Boundary::Mirror, Boundary::Periodic};
+
+Image random_image(long w, long h, int c, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0, 1);
+  Image img(w, h, c);
+  for (float& v : img.data) v = u(rng);
+  return img;
+}
+
+// Point samples of f at ((i + 1/2) W / win, (j + 1/2) H / hin), in double.
+Grid<double> sample(const std::function<double(double, double)>& f, long win, long hin, double W,
+                    double H) {
+  Grid<double> g(win, hin, 1);
+  for (long j = 0; j < hin; ++j)
+    for (long i = 0; i < win; ++i) g.at(i, j, 0) = f((i + 0.5) * W / win, (j + 0.5) * H / hin);
+  return g;
+}
+
+// int of M over [t0, t1] x [v0, v1] in (t, v) = ((x - x_n)/h, (y - y_n)/hy):
+// the slice's exact integral over [t0, t1], by 3-point Gauss in v between
+// the heights where the sides cross knot lines (degree <= 5 there).
+double cell_integral(const BoxSpline& B, double t0, double t1, double v0, double v1) {
+  static const double x[3] = {0.1127016653792583, 0.5, 0.8872983346207417};
+  static const double w[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+  std::vector<double> b = {v0, v1};
+  for (int k = -8; k <= 8; ++k)
+    for (double e : {0.0, 2 * t0, -2 * t0, 2 * t1, -2 * t1})
+      if (k + e > v0 && k + e < v1) b.push_back(k + e);
+  std::sort(b.begin(), b.end());
+  BoxSplineSlice s;
+  double sum = 0;
+  for (std::size_t i = 0; i + 1 < b.size(); ++i)
+    for (int g = 0; g < 3; ++g) {
+      B.slice(b[i] + (b[i + 1] - b[i]) * x[g], s);
+      sum += (b[i + 1] - b[i]) * w[g] * s.integrate(t0, t1);
+    }
+  return sum;
+}
+
+HexProjectionOptions options(int order, Boundary b = Boundary::Mirror, int margin = -1,
+                             double density = 1.0) {
+  HexProjectionOptions o;
+  o.order = order;
+  o.boundary = b;
+  o.margin = margin;
+  o.density = density;
+  return o;
+}
+
+}  // namespace
+
+TEST(HexLattice, DensityDeterminantAndDescription) {
+  for (double d : {1.0, 2.0, 0.37}) {
+    const Lattice L = Lattice::hexagonal(d, {0.25, -1.0});
+    EXPECT_NEAR(L.determinant(), 1.0 / d, 1e-14 / d);
+    EXPECT_NEAR(L.matrix()[0], std::sqrt(2 / (std::sqrt(3.0) * d)), 1e-15);
+    EXPECT_TRUE(L.is_hexagonal());
+    EXPECT_FALSE(L.separable());
+    EXPECT_EQ(L.description().rfind("hexagonal origin 0.25 -1 matrix", 0), 0u) << L.description();
+    // the six neighbours at distance h
+    for (auto [k1, k2] : {std::pair{1, 0}, {0, 1}, {-1, 1}}) {
+      const Vec2 p = L.position(k1, k2), o = L.origin();
+      EXPECT_NEAR(std::hypot(p.x - o.x, p.y - o.y), L.matrix()[0], 1e-14);
+    }
+  }
+  EXPECT_NEAR(Lattice::hexagonal().matrix()[0], std::sqrt(2 / std::sqrt(3.0)), 1e-15);  // DESIGN 2
+  EXPECT_FALSE(Lattice::cartesian().is_hexagonal());
+  EXPECT_THROW(Lattice::hexagonal(0), std::invalid_argument);
+}
+
+TEST(HexLayout, LatticePointAtTheCentreAndMarginOnEverySide) {
+  for (double d : {1.0, 2.5, 0.5})
+    for (auto [W, H] : {std::pair{40.0, 30.0}, {17.0, 9.0}, {3.0, 200.0}})
+      for (int m : {0, 3, 20}) {
+        const HexLayout L = hex_layout(d, W, H, m);
+        const double h = L.step(), M = m * h;
+        EXPECT_EQ(L.rows % 2, 0);
+        bool centre = false;
+        for (long j = 0; j < L.rows; ++j) {
+          EXPECT_LE(L.position(0, j).x, -M + 1e-9);
+          EXPECT_GE(L.position(L.columns - 1, j).x, W + M - 1e-9);
+          for (long i = 0; i < L.columns; ++i) {
+            const Vec2 p = L.position(i, j);
+            // lattice index n = (i - floor(j/2), j)
+            const Vec2 q = L.lattice.position(double(i - (j >> 1)), double(j));
+            EXPECT_NEAR(p.x, q.x, 1e-9);
+            EXPECT_NEAR(p.y, q.y, 1e-9);
+            centre = centre || (std::abs(p.x - W / 2) < 1e-9 && std::abs(p.y - H / 2) < 1e-9);
+          }
+        }
+        EXPECT_TRUE(centre) << d << " " << W << " " << H;
+        EXPECT_LE(L.position(0, 0).y, -M + 1e-9);
+        EXPECT_GE(L.position(0, L.rows - 1).y, H + M - 1e-9);
+      }
+}
+
+TEST(HexAcquisition, MatchesDirectSumAtAnyRatio) {
+  // Output frame 9 x 7 from 23 x 19 samples; every stored coefficient (margin
+  // 3) against r[n] = dx dy / |det L| sum f_ext(x_q) M(L^{-1}(x_q - x_n)) over
+  // the boundary-extended image.
+  const long win = 23, hin = 19;
+  const double W = 9, H = 7, dx = W / win, dy = H / hin;
+  const Image in = random_image(win, hin, 2, 42);
+  for (int n = 1; n <= kMaxBoxSplineOrder; ++n)
+    for (Boundary b : kRules) {
+      const HexLayout L = hex_layout(1.0, W, H, 3);
+      const HexAcquisitionPlan plan(win, hin, 2, W, H, L, n, b);
+      const Coefficients got = acquire(in, plan, 2);
+      const BoxSpline& B = BoxSpline::hexagonal(n);
+      const double scale = dx * dy / std::abs(L.lattice.determinant());
+      for (long j = 0; j < L.rows; ++j)
+        for (long i = 0; i < L.columns; ++i) {
+          const Vec2 p = L.position(i, j);
+          double ref[2] = {0, 0};
+          for (long e = long(std::floor((p.y - 3) / dy)); e < (p.y + 3) / dy; ++e)
+            for (long q = long(std::floor((p.x - 3) / dx)); q < (p.x + 3) / dx; ++q) {
+              const Vec2 u = L.lattice.coordinates({(q + 0.5) * dx, (e + 0.5) * dy});
+              const Vec2 un = L.lattice.coordinates(p);
+              const double w = B.eval(u.x - un.x, u.y - un.y);
+              if (w == 0) continue;
+              for (int c = 0; c < 2; ++c)
+                ref[c] += scale * w * in.at(extend_index(q, win, b), extend_index(e, hin, b), c);
+            }
+          for (int c = 0; c < 2; ++c)
+            EXPECT_NEAR(got.c.at(i, j, c), ref[c], 1e-13) << n << " " << boundary_name(b);
+        }
+      EXPECT_TRUE(got.lattice.is_hexagonal());
+      EXPECT_EQ(generator_name(got), B.name());
+    }
+}
+
+TEST(HexAcquisition, CellRuleMatchesDirectCellIntegrals) {
+  // HexQuadrature::Cell: r[n] = sum_q f_ext(q) int_{cell q} M, each cell an
+  // axis-aligned rectangle in (t, v), integrated directly.
+  const long win = 23, hin = 19;
+  const double W = 9, H = 7, dx = W / win, dy = H / hin;
+  const Image in = random_image(win, hin, 2, 43);
+  for (int n = 1; n <= kMaxBoxSplineOrder; ++n)
+    for (Boundary b : kRules) {
+      const HexLayout L = hex_layout(1.0, W, H, 3);
+      const HexAcquisitionPlan plan(win, hin, 2, W, H, L, n, b, HexQuadrature::Cell);
+      const Coefficients got = acquire(in, plan, 2);
+      const BoxSpline& B = BoxSpline::hexagonal(n);
+      const double h = L.step(), hy = L.row_step();
+      for (long j = 0; j < L.rows; ++j)
+        for (long i = 0; i < L.columns; ++i) {
+          const Vec2 p = L.position(i, j);
+          double ref[2] = {0, 0};
+          for (long e = long(std::floor((p.y - 3) / dy)); e < (p.y + 3) / dy; ++e)
+            for (long q = long(std::floor((p.x - 3) / dx)); q < (p.x + 3) / dx; ++q) {
+              const double w = cell_integral(B, (q * dx - p.x) / h, ((q + 1) * dx - p.x) / h,
+                                             (e * dy - p.y) / hy, ((e + 1) * dy - p.y) / hy);
+              if (w == 0) continue;
+              for (int c = 0; c < 2; ++c)
+                ref[c] += w * in.at(extend_index(q, win, b), extend_index(e, hin, b), c);
+            }
+          for (int c = 0; c < 2; ++c)
+            EXPECT_NEAR(got.c.at(i, j, c), ref[c], 1e-13) << n << " " << boundary_name(b);
+        }
+    }
+}
+
+TEST(HexAcquisition, BitIdenticalForAnyStripAndThreadCount) {
+  const Image in = random_image(203, 171, 3, 1);
+  const HexLayout L = hex_layout(1.0, 50, 40, hex_default_margin(2));
+  const HexAcquisitionPlan plan(203, 171, 3, 50, 40, L, 2, Boundary::Mirror);
+  const Coefficients ref = acquire(in, plan, 1);
+  for (int threads : {1, 2, 5})
+    for (long strip : {1L, 13L, 171L}) {
+      HexAcquisition a(plan, threads);
+      for (long y = 0; y < in.height; y += strip)
+        a.add_rows(y, std::min(in.height, y + strip), in.row(y));
+      EXPECT_EQ(a.finish().c.data, ref.c.data) << threads << " " << strip;
+    }
+  HexAcquisition a(plan);
+  EXPECT_THROW(a.add_rows(2, 4, in.row(2)), std::logic_error);
+  a.add_rows(0, 4, in.row(0));
+  EXPECT_THROW(a.finish(), std::logic_error);
+}
+
+TEST(HexProjection, ReproducesPolynomialsAwayFromTheBorder) {
+  // The hat reproduces degree 1, the quartic degree 3. Samples commensurate
+  // with the lattice (dx = h/2, dy = (sqrt(3)/2) h / 2) make the quadrature
+  // exact for these degrees (hex_acquisition.h), so what remains is the
+  // border: the mirror-extended polynomial is not one, and its effect decays
+  // like rho^d at d steps (rho about 0.2 and 0.48). At 40 steps in, 0.48^40 is
+  // 2e-13 of the border's jump (the polynomials here are of size ~1).
+  const double h = Lattice::hexagonal().matrix()[0], hy = Lattice::hexagonal().matrix()[3];
+  const long cols = 100, rows = 90;
+  const double W = cols * h, H = rows * hy;
+  for (int n = 1; n <= kMaxBoxSplineOrder; ++n) {
+    const int degree = 2 * n - 1;
+    std::mt19937 rng(n);
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::vector<double> coef((degree + 1) * (degree + 1));
+    for (double& v : coef) v = u(rng);
+    auto poly = [&](double x, double y) {
+      const double a = (x - W / 2) / 20, b = (y - H / 2) / 20;
+      double s = 0, pa = 1;
+      for (int i = 0; i <= degree; ++i, pa *= a) {
+        double pb = 1;
+        for (int j = 0; i + j <= degree; ++j, pb *= b) s += coef[i * (degree + 1) + j] * pa * pb;
+      }
+      return s;
+    };
+    const Grid<double> in = sample(poly, 2 * cols, 2 * rows, W, H);
+    const Coefficients k = project_hexagonal(in, W, H, options(n));
+    std::mt19937 pick(99);
+    std::uniform_real_distribution<double> x(40 * h, W - 40 * h), y(40 * hy, H - 40 * hy);
+    for (int t = 0; t < 100; ++t) {
+      const double px = x(pick), py = y(pick);
+      EXPECT_NEAR(evaluate(k, {px, py}), poly(px, py), 1e-12) << "order " << n;
+    }
+    // and the exact pixel average of f_app is the exact average of the polynomial
+    const Image avg = resample(k, Display::pixel(), cols / 2, rows / 2);
+    const double sx = W / (cols / 2), sy = H / (rows / 2);
+    for (long j = rows / 4 - 2; j < rows / 4 + 2; ++j)
+      for (long i = cols / 4 - 2; i < cols / 4 + 2; ++i) {
+        // exact for degree <= 3 by 2 x 2 Gauss-Legendre
+        const double g = 0.5 / std::sqrt(3.0);
+        double ref = 0;
+        for (double a : {0.5 - g, 0.5 + g})
+          for (double b : {0.5 - g, 0.5 + g}) ref += 0.25 * poly((i + a) * sx, (j + b) * sy);
+        // float output: half an ulp is 6e-8 of values up to 2
+        EXPECT_NEAR(avg.at(i, j, 0), ref, 6e-8 * std::max(2.0, std::abs(ref))) << "order " << n;
+      }
+  }
+}
+
+TEST(HexProjection, ApproximationOrder) {
+  // A smooth image, periodic on the frame, with the periodic rule: the L2
+  // error of f_app falls like h^(2n) when the density grows 4 times (h halves):
+  // the hat's order 2, the quartic's 4. Frame 12 x 12 steps at density 1,
+  // 24 x 24 at density 4; samples commensurate (4 per step and row).
+  const double h0 = Lattice::hexagonal().matrix()[0], hy0 = Lattice::hexagonal().matrix()[3];
+  const double W = 12 * h0, H = 12 * hy0;
+  auto f = [&](double x, double y) {
+    return std::cos(2 * kPi * x / W + 0.3) * std::sin(2 * kPi * y / H + 0.1) +
+           0.5 * std::cos(2 * kPi * (x / W + y / H));
+  };
+  for (int n = 1; n <= kMaxBoxSplineOrder; ++n) {
+    double err[2];
+    for (int t = 0; t < 2; ++t) {
+      const long steps = t ? 24 : 12;
+      const Grid<double> in = sample(f, 4 * steps, 4 * steps, W, H);
+      const Coefficients k =
+          project_hexagonal(in, W, H, options(n, Boundary::Periodic, -1, t ? 4.0 : 1.0));
+      double sum = 0;
+      const long fine = 97;
+      for (long j = 0; j < fine; ++j)
+        for (long i = 0; i < fine; ++i) {
+          const double x = (i + 0.5) * W / fine, y = (j + 0.5) * H / fine;
+          const double e = evaluate(k, {x, y}) - f(x, y);
+          sum += e * e;
+        }
+      err[t] = std::sqrt(sum / (fine * fine));
+    }
+    const double slope = std::log(err[0] / err[1]) / std::log(2.0);
+    EXPECT_NEAR(slope, 2 * n, 0.3) << "order " << n << " errors " << err[0] << " " << err[1];
+  }
+}
+
+TEST(HexProjection, SeamEffectBelowFloatResolution) {
+  // The periodic rule on the enlarged grid puts a seam at its edge; with the
+  // default margins its effect anywhere in the frame (edges included) is
+  // below 1e-7 of an image in [0, 1], against a margin three times larger.
+  const long W = 40, H = 30, s = 3;
+  const Image in = random_image(W * s, H * s, 1, 3);
+  for (int n = 1; n <= kMaxBoxSplineOrder; ++n) {
+    const Coefficients k = project_hexagonal(in, W, H, options(n));
+    const Coefficients ref =
+        project_hexagonal(in, W, H, options(n, Boundary::Mirror, 3 * hex_default_margin(n)));
+    double worst = 0;
+    for (int a = 0; a <= 80; ++a)
+      for (int b = 0; b <= 60; ++b) {
+        const Vec2 x{W * a / 80.0, H * b / 60.0};
+        worst = std::max(worst, std::abs(evaluate(k, x) - evaluate(ref, x)));
+      }
+    EXPECT_LT(worst, 1e-7) << "order " << n;
+  }
+}
+
+TEST(HexProjection, QuadratureOfSquareSamples) {
+  // Square samples are incommensurate with the lattice: the plain sum's error
+  // on a constant is the generator's transform at the sample grid's dual
+  // points, about (pi s h)^(-3n) (three sinc factors, each to the power n).
+  // Measured in the interior: hat 2e-2 at s = 4, 3e-4 at s = 16; quartic
+  // 8e-5 at s = 4, 2e-8 at s = 16 (falls 4^6).
+  auto interior_error = [](int n, long s) {
+    const long W = 40, H = 34;
+    Grid<double> in(W * s, H * s, 1);
+    for (double& v : in.data) v = 1.0;
+    const Coefficients k = project_hexagonal(in, double(W), double(H), options(n));
+    double e = 0;
+    for (int t = 0; t < 400; ++t) {
+      const Vec2 x{W * (0.3 + 0.4 * (t % 20) / 20.0), H * (0.3 + 0.4 * (t / 20) / 20.0)};
+      e = std::max(e, std::abs(evaluate(k, x) - 1.0));
+    }
+    return e;
+  };
+  EXPECT_LT(interior_error(1, 4), 3e-2);
+  EXPECT_LT(interior_error(1, 16), 1e-3);
+  const double q4 = interior_error(2, 4), q16 = interior_error(2, 16);
+  EXPECT_LT(q4, 2e-4);
+  EXPECT_LT(q16, q4 / 1000);
+}
+
+TEST(HexProjection, CellRuleIsExactOnFlatAreasAtAnySampling) {
+  // The cells tile the plane, so the cell rule's weights of a coefficient sum
+  // to int M = 1 whatever the ratio of the grids: a constant image is
+  // reproduced to rounding, where the point rule leaves the ripple measured
+  // above.
+  for (const double s : {4.0, 3.3}) {
+    const long W = 40, H = 34, win = std::lround(W * s), hin = std::lround(H * s);
+    Grid<double> in(win, hin, 1);
+    for (double& v : in.data) v = 0.75;
+    for (int n = 1; n <= kMaxBoxSplineOrder; ++n) {
+      HexProjectionOptions o = options(n);
+      o.quadrature = HexQuadrature::Cell;
+      const Coefficients k = project_hexagonal(in, double(W), double(H), o);
+      for (int t = 0; t < 200; ++t) {
+        const Vec2 x{W * (0.05 + 0.9 * (t % 20) / 20.0), H * (0.05 + 0.9 * (t / 20) / 10.0)};
+        EXPECT_NEAR(evaluate(k, x), 0.75, 1e-13) << "order " << n << " s " << s;
+      }
+    }
+  }
+  EXPECT_EQ(parse_hex_quadrature("cell"), HexQuadrature::Cell);
+  EXPECT_THROW(parse_hex_quadrature("midpoint"), std::invalid_argument);
+}
+
+TEST(HexResample, DisplayModesMatchDirectEvaluation) {
+  const long N = 20;
+  const Image in = random_image(N * 3, N * 3, 2, 11);
+  for (int n = 1; n <= kMaxBoxSplineOrder; ++n) {
+    const Coefficients k = project_hexagonal(in, N, N, options(n));
+    const Image centred = resample(k, Display::centred(), N, N);
+    const Image aa = resample(k, Display::antialiased_2x2(), N, N);
+    const Image offs = resample(k, Display::parse("offsets:0.1,-0.2;-0.3,0.05;0.4,0.4"), N, N);
+    const Image bigger = resample(k, Display::centred(), 27, 13);
+    for (long y = 0; y < N; ++y)
+      for (long x = 0; x < N; ++x)
+        for (int c = 0; c < 2; ++c) {
+          EXPECT_NEAR(centred.at(x, y, c), evaluate(k, {x + 0.5, y + 0.5}, c), 1e-5);
+          double e = 0;
+          for (double dy : {-0.25, 0.25})
+            for (double dx : {-0.25, 0.25}) e += evaluate(k, {x + 0.5 + dx, y + 0.5 + dy}, c);
+          EXPECT_NEAR(aa.at(x, y, c), e / 4, 1e-5);
+          const double o = (evaluate(k, {x + 0.6, y + 0.3}, c) +
+                            evaluate(k, {x + 0.2, y + 0.55}, c) +
+                            evaluate(k, {x + 0.9, y + 0.9}, c)) / 3;
+          EXPECT_NEAR(offs.at(x, y, c), o, 1e-5);
+        }
+    for (long y = 0; y < 13; ++y)
+      for (long x = 0; x < 27; ++x)
+        EXPECT_NEAR(bigger.at(x, y, 1),
+                    evaluate(k, {(x + 0.5) * N / 27.0, (y + 0.5) * N / 13.0}, 1), 1e-5);
+    // bit-identical for any thread count
+    EXPECT_EQ(resample(k, Display::pixel(), N, N, 3).data,
+              resample(k, Display::pixel(), N, N, 1).data);
+  }
+}
+
+TEST(HexResample, PixelModeIsThePixelAverage) {
+  // Against a fine midpoint sum of direct evaluations (error ~ (sx/m)^2 times
+  // the curvature of f_app, a few 1e-4 here), at a size other than the frame's.
+  const long N = 12;
+  const Image in = random_image(N * 2, N * 2, 1, 4);
+  for (int n = 1; n <= kMaxBoxSplineOrder; ++n) {
+    const Coefficients k = project_hexagonal(in, N, N, options(n));
+    const Image out = resample(k, Display::pixel(), 5, 7);
+    const double sx = N / 5.0, sy = N / 7.0;
+    for (long y = 0; y < 7; ++y)
+      for (long x = 0; x < 5; ++x) {
+        double s = 0;
+        const int m = 80;
+        for (int j = 0; j < m; ++j)
+          for (int i = 0; i < m; ++i)
+            s += evaluate(k, {(x + (i + 0.5) / m) * sx, (y + (j + 0.5) / m) * sy});
+        EXPECT_NEAR(out.at(x, y, 0), s / (m * m), 2e-3) << n;
+      }
+  }
+}
+
+TEST(HexProjection, DispatchThroughTheCartesianEntryPoints) {
+  const Image in = random_image(48, 36, 1, 7);
+  const HexLayout L = hex_layout(1.0, 16, 12, hex_default_margin(1));
+  const HexAcquisitionPlan plan(48, 36, 1, 16, 12, L, 1, Boundary::Mirror);
+  Coefficients a = acquire(in, plan), b = a;
+  prefilter(a);
+  hex_prefilter(b);
+  EXPECT_EQ(a.c.data, b.c.data);
+  EXPECT_THROW(prefilter(a, 1, PrefilterMethod::Recursive), std::invalid_argument);
+  EXPECT_EQ(evaluate(a, {3.3, 4.4}), hex_evaluate(a, {3.3, 4.4}));
+  EXPECT_EQ(resample(a, Display::antialiased_2x2(), 16, 12).data,
+            hex_resample(a, Display::antialiased_2x2(), 16, 12).data);
+}

@@ -1,0 +1,162 @@
+// siproject --lattice hex end to end, through the built binary: agreement with
+// the library, the coefficient round trip, usage errors.
+#include <gtest/gtest.h>
+
+#include <stdlib.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <random>
+
+#include "sis/hex_projection.h"
+#include "sis/imageio.h"
+
+namespace fs = std::filesystem;
+using namespace sis;
+
+#ifndef SIPROJECT
+#error "SIPROJECT must name the siproject binary"
+#endif
+
+namespace {
+
+struct Result {
+  int status;
+  std::string output;  // stdout and stderr
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(SIPROJECT) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  std::size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+  const int st = pclose(p);
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+
+class HexSiproject : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char tmpl[] = "/tmp/siproject-hex-test-XXXXXX";
+    dir_ = mkdtemp(tmpl);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (fs::path(dir_) / name).string(); }
+  std::string dir_;
+};
+
+Image random_image(long w, long h, int c, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0, 1);
+  Image img(w, h, c);
+  for (float& v : img.data) v = u(rng);
+  return img;
+}
+
+// What siproject computes: the library's projection with the coefficients
+// rounded to float, as the tool keeps them.
+Coefficients library(const Image& in, double W, double H, int order, double density,
+                     HexQuadrature quadrature = HexQuadrature::Point) {
+  HexProjectionOptions o;
+  o.order = order;
+  o.density = density;
+  o.quadrature = quadrature;
+  Coefficients k = project_hexagonal(in, W, H, o);
+  for (double& v : k.c.data) v = static_cast<float>(v);
+  return k;
+}
+
+}  // namespace
+
+TEST_F(HexSiproject, AgreesWithTheLibrary) {
+  const Image in = random_image(64, 48, 3, 1);
+  write_image(path("in.exr"), in);
+  for (const auto& [g, density] :
+       {std::pair<std::string, double>{"hex-hat", 1.0}, {"hex-quartic", 2.0}}) {
+    const Coefficients k = library(in, 16, 12, g == "hex-hat" ? 1 : 2, density);
+    for (const std::string d : {"centred", "2x2", "pixel"}) {
+      const Result r = run(path("in.exr") + " -o " + path("out.exr") +
+                           " --factor 4 -q --lattice hex --generator " + g + " --density " +
+                           std::to_string(density) + " --display " + d);
+      ASSERT_EQ(r.status, 0) << r.output;
+      const Image got = read_image(path("out.exr"));
+      ASSERT_EQ(got.width, 16);
+      ASSERT_EQ(got.height, 12);
+      EXPECT_EQ(got.data, resample(k, Display::parse(d), 16, 12).data) << g << " " << d;
+    }
+    ImageReader out(path("out.exr"));
+    EXPECT_EQ(out.attribute("sis:generator"), g);
+    EXPECT_EQ(out.attribute("sis:lattice"), "hexagonal");
+  }
+  // hex-quartic is the default generator on the hexagonal lattice
+  ASSERT_EQ(run(path("in.exr") + " -o " + path("q.exr") + " --factor 4 -q --lattice hex").status,
+            0);
+  EXPECT_EQ(read_image(path("q.exr")).data,
+            resample(library(in, 16, 12, 2, 1.0), Display::antialiased_2x2(), 16, 12).data);
+  // the cell quadrature
+  ASSERT_EQ(run(path("in.exr") + " -o " + path("q.exr") +
+                " --factor 4 -q --lattice hex --generator hex-hat --quadrature cell").status,
+            0);
+  EXPECT_EQ(read_image(path("q.exr")).data,
+            resample(library(in, 16, 12, 1, 1.0, HexQuadrature::Cell), Display::antialiased_2x2(),
+                     16, 12).data);
+}
+
+TEST_F(HexSiproject, CoefficientRoundTripEqualsDirectResult) {
+  write_image(path("in.exr"), random_image(90, 60, 3, 2));
+  for (const std::string extra : {"", "--display pixel", "--display centred"}) {
+    ASSERT_EQ(run(path("in.exr") + " -o " + path("direct.exr") +
+                  " --factor 3 -q --lattice hex --generator hex-hat --density 1.5 --coeffs " +
+                  path("c.exr") + " " + extra).status, 0);
+    const Result r = run(path("c.exr") + " -o " + path("rt.exr") + " -q " + extra);
+    ASSERT_EQ(r.status, 0) << r.output;
+    const Image a = read_image(path("direct.exr")), b = read_image(path("rt.exr"));
+    EXPECT_EQ(a.width, b.width);
+    EXPECT_EQ(a.data, b.data) << extra;
+  }
+  ImageReader c(path("c.exr"));
+  EXPECT_EQ(c.attribute("sis:lattice"), "hexagonal");
+  EXPECT_EQ(c.attribute("sis:storage"), "offset-rows");
+  EXPECT_EQ(c.attribute("sis:generator"), "hex-hat");
+  EXPECT_EQ(c.height() % 2, 0);
+  const Coefficients k = read_coefficients(c);
+  EXPECT_TRUE(k.lattice.is_hexagonal());
+  EXPECT_NEAR(std::abs(k.lattice.determinant()), 1 / 1.5, 1e-14);
+  // At another size: the stored approximation sampled there.
+  for (const std::string d : {"2x2", "pixel"}) {
+    const Result r = run(path("c.exr") + " -o " + path("rt.exr") + " -q --size 41x17 --display " + d);
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_EQ(read_image(path("rt.exr")).data, resample(k, Display::parse(d), 41, 17).data) << d;
+  }
+  // the recorded lattice cannot be overridden
+  EXPECT_EQ(run(path("c.exr") + " -o " + path("x.exr") + " --lattice hex").status, 2);
+  EXPECT_EQ(run(path("c.exr") + " -o " + path("x.exr") + " --density 2").status, 2);
+}
+
+TEST_F(HexSiproject, UsageErrors) {
+  write_image(path("in.exr"), random_image(32, 32, 3, 5));
+  const std::string base = path("in.exr") + " -o " + path("out.exr") + " --factor 2 ";
+  struct Case {
+    std::string args, says;
+  };
+  const Case cases[] = {
+      {"--lattice hex --generator cubic", "hex-hat or hex-quartic"},
+      {"--generator hex-hat", "needs --lattice hex"},
+      {"--lattice hex --method conventional", "min-error"},
+      {"--lattice hex --prefilter recursive", "fft"},
+      {"--lattice square", "--lattice 'square'"},
+      {"--density 2", "--density applies to --lattice hex"},
+      {"--lattice hex --density 0", "--density"},
+      {"--quadrature cell", "--quadrature applies to --lattice hex"},
+      {"--lattice hex --quadrature midpoint", "unknown quadrature 'midpoint'"},
+  };
+  for (const Case& c : cases) {
+    const Result r = run(base + c.args);
+    EXPECT_EQ(r.status, 2) << c.args << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.says), std::string::npos) << c.args << "\n" << r.output;
+    EXPECT_FALSE(fs::exists(path("out.exr"))) << c.args;
+  }
+}
