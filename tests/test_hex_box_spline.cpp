@@ -10,12 +10,12 @@
 
 #include "sis/box_spline.h"
 #include "sis/generator.h"
+#include "support.h"
 
 using namespace sis;
+using namespace sis::test;
 
 namespace {
-
-const double kPi = std::acos(-1.0);
 
 double hex_norm(double u1, double u2) {
   return std::max({std::abs(u1), std::abs(u2), std::abs(u1 + u2)});

@@ -7,8 +7,10 @@
 #include <random>
 
 #include "sis/hex_prefilter.h"
+#include "support.h"
 
 using namespace sis;
+using namespace sis::test;
 
 namespace {
 
@@ -28,38 +30,6 @@ std::vector<double> dense_gram(int order, long Q, long R) {
         G[std::size_t(j * Q + i) * N + wj * Q + wi] += t.value;
       }
   return G;
-}
-
-// Solves A x = y by Gaussian elimination with partial pivoting.
-std::vector<double> dense_solve(std::vector<double> A, std::vector<double> y) {
-  const std::size_t n = y.size();
-  for (std::size_t c = 0; c < n; ++c) {
-    std::size_t p = c;
-    for (std::size_t r = c + 1; r < n; ++r)
-      if (std::abs(A[r * n + c]) > std::abs(A[p * n + c])) p = r;
-    for (std::size_t k = 0; k < n; ++k) std::swap(A[c * n + k], A[p * n + k]);
-    std::swap(y[c], y[p]);
-    for (std::size_t r = c + 1; r < n; ++r) {
-      const double f = A[r * n + c] / A[c * n + c];
-      for (std::size_t k = c; k < n; ++k) A[r * n + k] -= f * A[c * n + k];
-      y[r] -= f * y[c];
-    }
-  }
-  std::vector<double> x(n);
-  for (std::size_t c = n; c-- > 0;) {
-    double s = y[c];
-    for (std::size_t k = c + 1; k < n; ++k) s -= A[c * n + k] * x[k];
-    x[c] = s / A[c * n + c];
-  }
-  return x;
-}
-
-Grid<double> random_grid(long w, long h, int c, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  Grid<double> g(w, h, c);
-  for (double& v : g.data) v = u(rng);
-  return g;
 }
 
 }  // namespace

@@ -12,21 +12,14 @@
 
 #include "sis/hex_projection.h"
 #include "sis/projection.h"
+#include "support.h"
 
 using namespace sis;
+using namespace sis::test;
 
 namespace {
 
-const double kPi = std::acos(-1.0);
 const Boundary kRules[] = {Boundary::Mirror, Boundary::Periodic};
-
-Image random_image(long w, long h, int c, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(0, 1);
-  Image img(w, h, c);
-  for (float& v : img.data) v = u(rng);
-  return img;
-}
 
 // Point samples of f at ((i + 1/2) W / win, (j + 1/2) H / hin), in double.
 Grid<double> sample(const std::function<double(double, double)>& f, long win, long hin, double W,

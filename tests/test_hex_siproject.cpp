@@ -11,9 +11,11 @@
 
 #include "sis/hex_projection.h"
 #include "sis/imageio.h"
+#include "support.h"
 
 namespace fs = std::filesystem;
 using namespace sis;
+using namespace sis::test;
 
 #ifndef SIPROJECT
 #error "SIPROJECT must name the siproject binary"
@@ -21,40 +23,9 @@ using namespace sis;
 
 namespace {
 
-struct Result {
-  int status;
-  std::string output;  // stdout and stderr
-};
+Result run(const std::string& args) { return run_tool(SIPROJECT, args); }
 
-Result run(const std::string& args) {
-  const std::string cmd = std::string(SIPROJECT) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  std::size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-  const int st = pclose(p);
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
-}
-
-class HexSiproject : public ::testing::Test {
- protected:
-  void SetUp() override {
-    char tmpl[] = "/tmp/siproject-hex-test-XXXXXX";
-    dir_ = mkdtemp(tmpl);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (fs::path(dir_) / name).string(); }
-  std::string dir_;
-};
-
-Image random_image(long w, long h, int c, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(0, 1);
-  Image img(w, h, c);
-  for (float& v : img.data) v = u(rng);
-  return img;
-}
+class HexSiproject : public TempDirTest {};
 
 // What siproject computes: the library's projection with the coefficients
 // rounded to float, as the tool keeps them.

@@ -10,30 +10,12 @@
 
 #include "sis/metrics.h"
 #include "sis/projection.h"
+#include "support.h"
 
 using namespace sis;
+using namespace sis::test;
 
 namespace {
-
-const double kPi = std::acos(-1.0);
-
-Image sample(const std::function<double(double, double, int)>& f, long win, long hin, int channels,
-             double W, double H) {
-  Image img(win, hin, channels);
-  for (long j = 0; j < hin; ++j)
-    for (long i = 0; i < win; ++i)
-      for (int c = 0; c < channels; ++c)
-        img.at(i, j, c) = static_cast<float>(f((i + 0.5) * W / win, (j + 0.5) * H / hin, c));
-  return img;
-}
-
-Image random_image(long w, long h, int c, unsigned seed, float lo = 0, float hi = 1) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(lo, hi);
-  Image img(w, h, c);
-  for (float& v : img.data) v = u(rng);
-  return img;
-}
 
 // Share of |F|^2 above each cutoff by a direct O(N^2) complex DFT over every
 // bin (no Hermitian folding), frequencies folded into [-1/2, 1/2].

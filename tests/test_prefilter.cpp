@@ -7,8 +7,10 @@
 #include <random>
 
 #include "sis/prefilter.h"
+#include "support.h"
 
 using namespace sis;
+using namespace sis::test;
 
 namespace {
 
@@ -22,38 +24,6 @@ std::vector<std::vector<double>> gram(int d, long n, Boundary b) {
   return G;
 }
 
-// Solves A x = y by Gaussian elimination with partial pivoting.
-std::vector<double> dense_solve(std::vector<std::vector<double>> A, std::vector<double> y) {
-  const std::size_t n = y.size();
-  for (std::size_t c = 0; c < n; ++c) {
-    std::size_t p = c;
-    for (std::size_t r = c + 1; r < n; ++r)
-      if (std::abs(A[r][c]) > std::abs(A[p][c])) p = r;
-    std::swap(A[c], A[p]);
-    std::swap(y[c], y[p]);
-    for (std::size_t r = c + 1; r < n; ++r) {
-      const double f = A[r][c] / A[c][c];
-      for (std::size_t k = c; k < n; ++k) A[r][k] -= f * A[c][k];
-      y[r] -= f * y[c];
-    }
-  }
-  std::vector<double> x(n);
-  for (std::size_t c = n; c-- > 0;) {
-    double s = y[c];
-    for (std::size_t k = c + 1; k < n; ++k) s -= A[c][k] * x[k];
-    x[c] = s / A[c][c];
-  }
-  return x;
-}
-
-Grid<double> random_grid(long w, long h, int c, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  Grid<double> g(w, h, c);
-  for (double& v : g.data) v = u(rng);
-  return g;
-}
-
 const Boundary kRules[] = {Boundary::Mirror, Boundary::Periodic};
 
 }  // namespace
@@ -65,11 +35,12 @@ TEST(Prefilter, EqualsDenseSolveOfGramSystem2D) {
       Grid<double> r = random_grid(nx, ny, 2, 100 + d);
       // Kronecker Gram: G[(y,x),(y',x')] = Gy[y][y'] Gx[x][x'].
       const auto Gx = gram(d, nx, b), Gy = gram(d, ny, b);
-      std::vector<std::vector<double>> G(nx * ny, std::vector<double>(nx * ny));
+      const long N = nx * ny;
+      std::vector<double> G(N * N);
       for (long y = 0; y < ny; ++y)
         for (long x = 0; x < nx; ++x)
           for (long yy = 0; yy < ny; ++yy)
-            for (long xx = 0; xx < nx; ++xx) G[y * nx + x][yy * nx + xx] = Gy[y][yy] * Gx[x][xx];
+            for (long xx = 0; xx < nx; ++xx) G[(y * nx + x) * N + yy * nx + xx] = Gy[y][yy] * Gx[x][xx];
       for (PrefilterMethod m : {PrefilterMethod::FFT, PrefilterMethod::Recursive}) {
         Grid<double> c = r;
         PrefilterPlan(d, nx, ny, b, m).execute(c);

@@ -7,33 +7,14 @@
 #include <random>
 
 #include "sis/projection.h"
+#include "support.h"
 
 using namespace sis;
+using namespace sis::test;
 
 namespace {
 
-const double kPi = std::acos(-1.0);
 const Boundary kRules[] = {Boundary::Mirror, Boundary::Periodic};
-
-// Point samples of f at ((i + 1/2) W / win, (j + 1/2) H / hin), the
-// supersampled input of an image of W x H output pixels.
-Image sample(const std::function<double(double, double, int)>& f, long win, long hin, int channels,
-             double W, double H) {
-  Image img(win, hin, channels);
-  for (long j = 0; j < hin; ++j)
-    for (long i = 0; i < win; ++i)
-      for (int c = 0; c < channels; ++c)
-        img.at(i, j, c) = static_cast<float>(f((i + 0.5) * W / win, (j + 0.5) * H / hin, c));
-  return img;
-}
-
-Image random_image(long w, long h, int c, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(0, 1);
-  Image img(w, h, c);
-  for (float& v : img.data) v = u(rng);
-  return img;
-}
 
 Coefficients project_with(const Image& in, long w, long h, const Kernel& g, Method m, Boundary b,
                           int threads = 1) {

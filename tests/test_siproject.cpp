@@ -14,9 +14,11 @@
 #include "sis/imageio.h"
 #include "sis/metrics.h"
 #include "sis/projection.h"
+#include "support.h"
 
 namespace fs = std::filesystem;
 using namespace sis;
+using namespace sis::test;
 
 #ifndef SIPROJECT
 #error "SIPROJECT must name the siproject binary"
@@ -24,48 +26,9 @@ using namespace sis;
 
 namespace {
 
-struct Result {
-  int status;
-  std::string output;  // stdout and stderr
-};
-
-Result run_tool(const char* tool, const std::string& args) {
-  const std::string cmd = std::string(tool) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  std::size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-  const int st = pclose(p);
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
-}
-
 Result run(const std::string& args) { return run_tool(SIPROJECT, args); }
 
-class Siproject : public ::testing::Test {
- protected:
-  void SetUp() override {
-    char tmpl[] = "/tmp/siproject-test-XXXXXX";
-    dir_ = mkdtemp(tmpl);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (fs::path(dir_) / name).string(); }
-  std::vector<std::string> files() const {
-    std::vector<std::string> v;
-    for (const auto& e : fs::directory_iterator(dir_)) v.push_back(e.path().filename().string());
-    std::sort(v.begin(), v.end());
-    return v;
-  }
-  std::string dir_;
-};
-
-Image random_image(long w, long h, int c, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(0, 1);
-  Image img(w, h, c);
-  for (float& v : img.data) v = u(rng);
-  return img;
-}
+class Siproject : public TempDirTest {};
 
 void write_half(const std::string& path, const Image& img) {
   OIIO::ImageSpec spec(int(img.width), int(img.height), img.channels, OIIO::TypeDesc::HALF);

@@ -7,12 +7,12 @@
 
 #include "sis/projection.h"
 #include "sis/range.h"
+#include "support.h"
 
 using namespace sis;
+using namespace sis::test;
 
 namespace {
-const double kPi = std::acos(-1.0);
-
 // (1/pi) integral_0^pi g(w) dw by the midpoint rule (g smooth and periodic:
 // spectrally accurate).
 template <class G>
