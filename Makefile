@@ -60,6 +60,10 @@ METHOD_OPTS_mitchell     := --generator mitchell --method conventional --display
 METHOD_OPTS_me-cubic     := --generator cubic --method min-error --display centred
 METHOD_OPTS_me-tent-2x2  := --generator tent --method min-error --display 2x2
 METHOD_OPTS_me-cubic-2x2 := --generator cubic --method min-error --display 2x2
+# The hexagonal lattice (not in the default METHODS): min-error on a
+# hexagonal lattice of the same density as the pixels, resampled to them.
+METHOD_OPTS_hex-hat      := --lattice hex --generator hex-hat --display centred
+METHOD_OPTS_hex-quartic  := --lattice hex --generator hex-quartic --display centred
 
 # Binaries given on the command line are used as they are; the default ones
 # are brought up to date by the build target first.
@@ -122,7 +126,7 @@ RENDER_W := $(shell awk 'BEGIN { printf "%d", $(RES_W) * $(FACTOR) + 0.5 }')
 RENDER_H := $(shell awk 'BEGIN { printf "%d", $(RES_H) * $(FACTOR) + 0.5 }')
 unknown_methods := $(strip $(foreach m,$(METHODS),$(if $(METHOD_OPTS_$(m)),,$(m))))
 ifneq ($(unknown_methods),)
-$(error unknown method(s) $(unknown_methods); known: box conv-tent me-tent mitchell me-cubic me-tent-2x2 me-cubic-2x2)
+$(error unknown method(s) $(unknown_methods); known: box conv-tent me-tent mitchell me-cubic me-tent-2x2 me-cubic-2x2 hex-hat hex-quartic)
 endif
 
 ALL_SCENES := $(sort $(basename $(notdir $(wildcard $(SCENEDIR)/*.pov))))
@@ -220,3 +224,60 @@ PYTHON ?= .venv/bin/python
 .PHONY: stability
 stability: $(if $(PREBUILT),,build)
 	@$(PYTHON) scripts/stability.py --build $(BUILD) --out $(OUT)/report/stability $(if $(QUICK),--quick)
+
+# ==== comparison: accuracy against speed (scripts/compare.py) =================
+# make compare [QUICK=1]: every scene and method at several factors against a
+# reference render (the zone plate: its closed form), and POV-Ray's own
+# antialiasing (+A0.0 +AMm +Rr) at the final size; times, errors, high-pass
+# shares, overshoot; charts, tables, images. Report: $(OUT)/report/index.html,
+# results.json, *.csv, README-results.md, compare/ (charts and images);
+# QUICK=1: small sizes, three scenes, $(OUT)/report-quick/, a minute or two.
+# Renders, images and measures are kept in $(OUT)/compare (QUICK:
+# $(OUT)/compare-quick) and remade only when what they were made from changes.
+# COMPARE_* variables override the sizes: COMPARE_SCENES, COMPARE_RES,
+# COMPARE_FACTORS, COMPARE_REF_FACTOR, COMPARE_AA, COMPARE_BORDER,
+# COMPARE_REPEATS (timing runs, smallest kept).
+PYTHON ?= .venv/bin/python
+ifneq ($(QUICK),)
+COMPARE_SCENES     ?= checker edges zoneplate
+COMPARE_RES        ?= 64
+COMPARE_FACTORS    ?= 1 2 4
+COMPARE_REF_FACTOR ?= 8
+COMPARE_AA         ?= am1-r2 am2-r2
+COMPARE_REPEATS    ?= 1
+COMPARE_LABEL      := quick
+COMPARE_WORK       ?= $(OUT)/compare-quick
+COMPARE_REPORT     ?= $(OUT)/report-quick
+else
+COMPARE_SCENES     ?= checker objects edges hdr zoneplate
+COMPARE_RES        ?= 256
+COMPARE_FACTORS    ?= 1 2 3 4 6 8
+COMPARE_REF_FACTOR ?= 32
+COMPARE_AA         ?= am1-r2 am1-r3 am1-r4 am2-r1 am2-r2 am2-r3 am2-r4
+COMPARE_REPEATS    ?= 3
+COMPARE_LABEL      := full
+COMPARE_WORK       ?= $(OUT)/compare
+COMPARE_REPORT     ?= $(OUT)/report
+endif
+COMPARE_BORDER     ?= 4
+.PHONY: compare
+compare: $(if $(PREBUILT),,build)
+	@test -x $(PYTHON) || { echo "compare: $(PYTHON) not found: run scripts/setup.sh (make setup)" >&2; exit 1; }
+	@$(PYTHON) scripts/compare.py --work $(COMPARE_WORK) --report $(COMPARE_REPORT) --label $(COMPARE_LABEL) \
+	  --scenes '$(COMPARE_SCENES)' --scenedir $(SCENEDIR) --res $(COMPARE_RES) \
+	  --factors '$(COMPARE_FACTORS)' --ref-factor $(COMPARE_REF_FACTOR) --aa '$(COMPARE_AA)' \
+	  --border $(COMPARE_BORDER) --cutoffs '$(CUTOFFS)' --repeats $(COMPARE_REPEATS) \
+	  --zp-nyquist $(ZP_NYQUIST) --siproject $(SIPROJECT) --simetrics $(SIMETRICS) \
+	  $(foreach m,$(METHODS),--method '$(m)=$(METHOD_OPTS_$(m))')
+# ==== end of comparison ========================================================
+
+# ---- bench: siproject against oiiotool, splineops and the decode floor ---------
+# make bench [QUICK=1]: out/bench/bench.md and bench.csv (scripts/bench.py);
+# the input renders (objects at 8000^2, checker at 16000^2) are made once.
+.PHONY: bench microbench
+bench: $(if $(PREBUILT),,build)
+	@$(PYTHON) scripts/bench.py --build $(BUILD) --outdir $(OUT)/bench $(if $(QUICK),--quick) $(BENCHFLAGS)
+
+# Google Benchmark microbenchmarks of acquisition, prefilter and resampling.
+microbench: $(if $(PREBUILT),,build)
+	@$(BUILD)/tests/microbench

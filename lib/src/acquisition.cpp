@@ -147,19 +147,34 @@ void Acquisition::add(long y0, long y1, const T* rows) {
   });
 
   // Vertical pass: each coefficient row adds the rows of this strip in its
-  // support, in increasing row order.
-  parallel_for(plan_.coefficients_y(), threads_, [&](long n0, long n1) {
-    for (long n = n0; n < n1; ++n) {
-      long& e = cursor_[n];
-      double* acc = acc_.row(n);
-      while (e < wy.end(n) && wy.index[e] < y1) {
-        const double w = wy.weight[e];
-        const double* h = strip_.data() + std::size_t(wy.index[e] - y0) * hrow;
-        for (std::size_t k = 0; k < hrow; ++k) acc[k] += w * h[k];
-        ++e;
-      }
+  // support, in increasing row order. The few rows a strip touches are split
+  // among the threads by columns, so every thread has work; each sum keeps
+  // its order whatever the split.
+  long first = -1, last = -1;  // coefficient rows this strip touches
+  for (long n = 0; n < plan_.coefficients_y(); ++n)
+    if (cursor_[n] < wy.end(n) && wy.index[cursor_[n]] < y1) {
+      if (first < 0) first = n;
+      last = n;
     }
-  });
+  if (first >= 0) {
+    std::vector<long> stop(last - first + 1);
+    for (long n = first; n <= last; ++n) {
+      long e = cursor_[n];
+      while (e < wy.end(n) && wy.index[e] < y1) ++e;
+      stop[n - first] = e;
+    }
+    parallel_for(long(hrow), threads_, [&](long k0, long k1) {
+      for (long n = first; n <= last; ++n) {
+        double* acc = acc_.row(n);
+        for (long e = cursor_[n]; e < stop[n - first]; ++e) {
+          const double w = wy.weight[e];
+          const double* h = strip_.data() + std::size_t(wy.index[e] - y0) * hrow;
+          for (long k = k0; k < k1; ++k) acc[k] += w * h[k];
+        }
+      }
+    });
+    for (long n = first; n <= last; ++n) cursor_[n] = stop[n - first];
+  }
   next_row_ = y1;
 }
 

@@ -69,7 +69,10 @@ std::string ImageReader::attribute(const std::string& name) const {
 long ImageReader::preferred_strip() const {
   const long th = impl_->spec.tile_height;
   if (th > 0) return th * std::max(1L, 32 / th);
-  return 32;  // two of EXR's 16-row zip blocks
+  // Whole 16-row zip blocks, about 4 MB of float rows: 32 rows up to 10000
+  // RGB columns, 16 beyond (memory stays flat for very wide inputs).
+  const long row_bytes = long(impl_->spec.width) * impl_->spec.nchannels * long(sizeof(float));
+  return std::clamp(16 * ((4L << 20) / std::max(1L, row_bytes) / 16), 16L, 32L);
 }
 
 void ImageReader::read_rows(long y0, long y1, float* rows) {

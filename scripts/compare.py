@@ -1,0 +1,751 @@
+#!/usr/bin/env python3
+"""compare.py: accuracy against speed for every scene and method (make compare).
+
+    compare.py --work DIR --report DIR [--scenes "checker objects ..."] [--res 256]
+               [--factors "1 2 3 4 6 8"] [--ref-factor 32] [--aa "am1-r2 ... am2-r4"]
+               [--method NAME='siproject options' ...] [--border 4]
+               [--cutoffs "0.125 0.25"] [--show-factor 4] [--repeats 3]
+               [--siproject PATH] [--simetrics PATH] [--label full|quick]
+
+For every scene (scenes/SCENE.pov):
+  renders    POV-Ray through scripts/render.sh, antialiasing off, at every
+             FACTOR (RES * FACTOR pixels per axis) and at REF_FACTOR (the
+             reference); wall time of render.sh measured (POV-Ray's start-up
+             and parse included), the smallest of up to REPEATS runs for renders
+             under 3 s;
+  baseline   POV-Ray's own antialiasing at the final size: +A0.0 (threshold 0,
+             so every pixel is supersampled) with +AM1 (n x n grid plus the
+             centre ray, n = depth) or +AM2 (recursive corner subdivision,
+             a (2^(R-1)+1)^2 grid per pixel), -J; render.sh forces -A but
+             passes these after it, and POV-Ray takes the last option given;
+  methods    siproject on every render, every method (the Makefile's
+             METHOD_OPTS_*): the display EXR, the coefficients (--coeffs, one
+             file per distinct approximation: methods that differ only in
+             --display share f_app), and siproject -v "total" (the smallest of
+             REPEATS runs);
+  reference  display: the reference render's pixel averages (siproject
+             --generator box --method conventional at the final size);
+  measures   simetrics per (scene, factor, method): hp shares at CUTOFFS, rms
+             and psnr against the reference display (border BORDER), overshoot
+             against the method's own input (the baseline: the reference
+             render), continuous L2 error of f_app against the reference
+             render (--truth) or, for the zone plate, its closed form
+             (--zoneplate K). The baseline's f_app is piecewise constant (box).
+
+Every artefact lives in WORK with a JSON sidecar holding what it was made from
+(file digests, options, the tools' digests) and its timings; it is remade only
+when that changes, so renders are never redone for nothing. The binaries are
+copied to a private folder first (a rebuild during the run cannot mix
+versions). Then scripts/report_compare.py writes the report folder (built in a
+temporary folder and renamed into place). Any failure: a message on stderr,
+exit status 1 (2 for usage), no partial file.
+"""
+import argparse
+import hashlib
+import json
+import math
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+PROG = "compare"
+
+# The Makefile passes its METHOD_OPTS_* (--method NAME=OPTIONS); these are the
+# same, for running the script by hand.
+DEFAULT_METHODS = [
+    ("box", "--generator box --method conventional --display centred"),
+    ("conv-tent", "--generator tent --method conventional --display centred"),
+    ("me-tent", "--generator tent --method min-error --display centred"),
+    ("mitchell", "--generator mitchell --method conventional --display centred"),
+    ("me-cubic", "--generator cubic --method min-error --display centred"),
+    ("me-tent-2x2", "--generator tent --method min-error --display 2x2"),
+    ("me-cubic-2x2", "--generator cubic --method min-error --display 2x2"),
+]
+AA_RE = re.compile(r"^am([12])-r([1-9])$")
+SCHEMA = 1  # bump to redo every step after a change of what the sidecars hold
+
+
+class CompareError(Exception):
+    pass
+
+
+def log(message):
+    print(f"{PROG}: {message}", file=sys.stderr, flush=True)
+
+
+def say(message):
+    print(message, flush=True)
+
+
+def rel(path):
+    p = os.path.abspath(path)
+    return os.path.relpath(p, ROOT) if p.startswith(ROOT + os.sep) else p
+
+
+# ---- files -----------------------------------------------------------------------
+
+def current_umask():
+    m = os.umask(0)
+    os.umask(m)
+    return m
+
+
+def write_atomic(path, text):
+    d = os.path.dirname(os.path.abspath(path))
+    os.makedirs(d, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", dir=d)
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.chmod(tmp, 0o666 & ~current_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def write_json(path, obj):
+    write_atomic(path, json.dumps(obj, indent=1, sort_keys=True, allow_nan=False) + "\n")
+
+
+def read_json(path):
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
+def temp_name(path, suffix):
+    """A hidden temporary name beside PATH ending in SUFFIX (siproject wants .exr)."""
+    d, b = os.path.split(path)
+    return os.path.join(d, f".{b}.{os.getpid()}.tmp{suffix}")
+
+
+def remove(*paths):
+    for p in paths:
+        try:
+            os.unlink(p)
+        except FileNotFoundError:
+            pass
+
+
+def same_pixels(a, b):
+    """Two EXRs with the same channels, pixels and sis: metadata (the keys
+    both have, but for sis:input): a redone step that made the same image keeps the old file, so
+    that what depends on the file's digest is not redone for nothing."""
+    if not (os.path.isfile(a) and os.path.isfile(b)):
+        return False
+    import OpenEXR
+    try:
+        with OpenEXR.File(a) as fa, OpenEXR.File(b) as fb:
+            ha = {k: str(v) for k, v in fa.header().items() if k.startswith("sis:") and k != "sis:input"}
+            hb = {k: str(v) for k, v in fb.header().items() if k.startswith("sis:") and k != "sis:input"}
+            # A key only one build writes (a new feature's) does not make the images differ.
+            if any(ha[k] != hb[k] for k in ha.keys() & hb.keys()):
+                return False
+            ca, cb = fa.channels(), fb.channels()
+            if sorted(ca) != sorted(cb):
+                return False
+            for k in ca:
+                pa, pb = ca[k].pixels, cb[k].pixels
+                if pa.dtype != pb.dtype or pa.shape != pb.shape or pa.tobytes() != pb.tobytes():
+                    return False
+            return True
+    except Exception:  # unreadable: not the same
+        return False
+
+
+def settle(tmp, final):
+    """Moves TMP to FINAL unless FINAL already holds the same image."""
+    if same_pixels(tmp, final):
+        remove(tmp)
+    else:
+        os.replace(tmp, final)
+
+
+class Digests:
+    """SHA-256 of files, kept across runs by (size, mtime) in WORK/.digests.json."""
+
+    def __init__(self, path):
+        self.path = path
+        self.cache = read_json(path) or {}
+        self.dirty = False
+
+    def __call__(self, path):
+        p = os.path.abspath(path)
+        st = os.stat(p)
+        key = [st.st_size, st.st_mtime_ns]
+        hit = self.cache.get(p)
+        if hit and hit[0] == key:
+            return hit[1]
+        h = hashlib.sha256()
+        with open(p, "rb") as f:
+            for block in iter(lambda: f.read(1 << 22), b""):
+                h.update(block)
+        digest = h.hexdigest()[:20]
+        self.cache[p] = [key, digest]
+        self.dirty = True
+        return digest
+
+    def save(self):
+        if self.dirty:
+            live = {k: v for k, v in self.cache.items() if os.path.exists(k)}
+            write_json(self.path, live)
+            self.dirty = False
+
+
+def fresh(sidecar, stamp, outputs):
+    """The step's sidecar records STAMP and every output exists."""
+    info = read_json(sidecar)
+    if not info or info.get("stamp") != stamp:
+        return None
+    if not all(os.path.isfile(o) for o in outputs):
+        return None
+    return info
+
+
+# ---- processes -------------------------------------------------------------------
+
+def load_average():
+    try:
+        with open("/proc/loadavg") as f:
+            return float(f.read().split()[0])
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def run(cmd, what):
+    """Runs CMD; returns (stdout, stderr); raises CompareError naming WHAT."""
+    try:
+        r = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
+    except OSError as e:
+        raise CompareError(f"{what}: cannot run {cmd[0]}: {e}")
+    if r.returncode != 0:
+        tail = "\n".join((r.stderr or r.stdout).strip().splitlines()[-15:])
+        raise CompareError(f"{what} failed with status {r.returncode}:\n  {shlex.join(cmd)}\n{tail}")
+    return r.stdout, r.stderr
+
+
+TOTAL_RE = re.compile(r"total ([0-9.]+) s")
+
+
+def siproject_total(stderr, what):
+    m = TOTAL_RE.findall(stderr)
+    if not m:
+        raise CompareError(f"{what}: siproject -v printed no 'total N s':\n{stderr.strip()}")
+    return float(m[-1])
+
+
+def povray_stats(stderr):
+    """Primary rays and trace time from POV-Ray's +GS statistics."""
+    out = {}
+    m = re.search(r"Pixels:\s+(\d+)\s+Samples:\s+(\d+)", stderr)
+    if m:
+        out["pixels_traced"] = int(m.group(1))
+        out["samples"] = int(m.group(2))
+    m = re.search(r"Trace Time:.*?\(([0-9.]+) seconds\)", stderr)
+    if m:
+        out["trace_s"] = float(m.group(1))
+    m = re.search(r"Parse Time:.*?\(([0-9.]+) seconds\)", stderr)
+    if m:
+        out["parse_s"] = float(m.group(1))
+    return out
+
+
+# ---- configuration -------------------------------------------------------------------
+
+def parse_size(text):
+    m = re.fullmatch(r"([1-9][0-9]*)(?:x([1-9][0-9]*))?", text)
+    if not m:
+        raise CompareError(f"--res {text}: expected N or WxH, positive integers")
+    w = int(m.group(1))
+    return w, int(m.group(2) or w)
+
+
+def parse_args(argv):
+    p = argparse.ArgumentParser(prog="compare.py", description=__doc__.split("\n\n")[0])
+    p.add_argument("--work", required=True, help="folder of renders, images and measures (kept)")
+    p.add_argument("--report", required=True, help="report folder (replaced as a whole)")
+    p.add_argument("--scenes", default="checker objects edges hdr zoneplate")
+    p.add_argument("--scenedir", default=os.path.join(ROOT, "scenes"))
+    p.add_argument("--res", default="256")
+    p.add_argument("--factors", default="1 2 3 4 6 8")
+    p.add_argument("--ref-factor", type=float, default=32)
+    p.add_argument("--aa", default="am1-r2 am1-r3 am1-r4 am2-r1 am2-r2 am2-r3 am2-r4",
+                   help="POV-Ray antialiasing baselines: amM-rR = +AM<M> +R<R> +A0.0 -J")
+    p.add_argument("--method", action="append", default=[], metavar="NAME=OPTIONS",
+                   help="a method and its siproject options (repeatable; default: the Makefile's)")
+    p.add_argument("--border", type=int, default=4, help="output pixels left out along each edge")
+    p.add_argument("--cutoffs", default="0.125 0.25")
+    p.add_argument("--show-factor", type=float, default=None,
+                   help="factor of the images shown in the report (default: 4, or the nearest)")
+    p.add_argument("--repeats", type=int, default=3, help="timing runs (smallest kept)")
+    p.add_argument("--repeat-below", type=float, default=3.0,
+                   help="renders longer than this many seconds are timed once")
+    p.add_argument("--zp-nyquist", type=float, default=0.7)
+    p.add_argument("--siproject", default=os.path.join(ROOT, "build", "tools", "siproject"))
+    p.add_argument("--simetrics", default=os.path.join(ROOT, "build", "tools", "simetrics"))
+    p.add_argument("--label", default="full", help="names the configuration in the report")
+    a = p.parse_args(argv)
+
+    cfg = argparse.Namespace()
+    cfg.work = os.path.abspath(a.work)
+    cfg.report = os.path.abspath(a.report)
+    cfg.label = a.label
+    cfg.scenedir = os.path.abspath(a.scenedir)
+    cfg.scenes = a.scenes.split()
+    if not cfg.scenes:
+        raise CompareError("--scenes: no scene given")
+    for s in cfg.scenes:
+        if not os.path.isfile(os.path.join(cfg.scenedir, s + ".pov")):
+            have = sorted(f[:-4] for f in os.listdir(cfg.scenedir) if f.endswith(".pov"))
+            raise CompareError(f"no scene {rel(os.path.join(cfg.scenedir, s + '.pov'))}; scenes: {' '.join(have)}")
+    cfg.w, cfg.h = parse_size(a.res)
+    cfg.res_tag = str(cfg.w) if cfg.w == cfg.h else f"{cfg.w}x{cfg.h}"
+    try:
+        cfg.factors = [float(f) for f in a.factors.split()]
+        cfg.cutoffs = [float(c) for c in a.cutoffs.split()]
+    except ValueError as e:
+        raise CompareError(f"--factors/--cutoffs: {e}")
+    if not cfg.factors or any(not (f > 0 and math.isfinite(f)) for f in cfg.factors):
+        raise CompareError(f"--factors '{a.factors}': expected positive numbers")
+    cfg.factors = sorted(set(cfg.factors))
+    if not (a.ref_factor > max(cfg.factors)):
+        raise CompareError(f"--ref-factor {a.ref_factor:g} must exceed the largest factor {max(cfg.factors):g}")
+    cfg.ref_factor = a.ref_factor
+    cfg.aa = a.aa.split()
+    for name in cfg.aa:
+        if not AA_RE.match(name):
+            raise CompareError(f"--aa {name}: expected amM-rR, M = 1 or 2, R = 1..9")
+    methods = []
+    for spec in a.method:
+        name, eq, opts = spec.partition("=")
+        if not eq or not name or not opts.strip():
+            raise CompareError(f"--method '{spec}': expected NAME=OPTIONS")
+        methods.append((name.strip(), opts.strip()))
+    cfg.methods = methods or list(DEFAULT_METHODS)
+    names = [m for m, _ in cfg.methods]
+    if len(set(names)) != len(names):
+        raise CompareError(f"--method: a name given twice: {' '.join(names)}")
+    cfg.method_opts = dict(cfg.methods)
+    cfg.method_names = names
+    if a.border < 0 or 2 * a.border >= min(cfg.w, cfg.h):
+        raise CompareError(f"--border {a.border} leaves no pixel of {cfg.w} x {cfg.h}")
+    cfg.border = a.border
+    if a.repeats < 1:
+        raise CompareError("--repeats must be at least 1")
+    cfg.repeats = a.repeats
+    cfg.repeat_below = a.repeat_below
+    sf = a.show_factor if a.show_factor is not None else 4.0
+    cfg.show_factor = min(cfg.factors, key=lambda f: (abs(math.log(f / sf)), -f))
+    cfg.zp_nyquist = a.zp_nyquist
+    # As the Makefile: ZP_K = ZP_NYQUIST * pi * output width, printed %.6f.
+    cfg.zp_k = "%.6f" % (a.zp_nyquist * math.pi * cfg.w)
+    cfg.siproject = os.path.abspath(a.siproject)
+    cfg.simetrics = os.path.abspath(a.simetrics)
+    return cfg
+
+
+def fmt_factor(f):
+    return f"{f:g}"
+
+
+def render_size(cfg, factor):
+    return int(cfg.w * factor + 0.5), int(cfg.h * factor + 0.5)
+
+
+def approximation_key(opts):
+    """siproject options without --display: methods with the same key share f_app."""
+    words = shlex.split(opts)
+    out, i = [], 0
+    while i < len(words):
+        if words[i] == "--display":
+            i += 2
+            continue
+        if words[i].startswith("--display="):
+            i += 1
+            continue
+        out.append(words[i])
+        i += 1
+    return " ".join(out)
+
+
+def aa_options(name):
+    m = AA_RE.match(name)
+    return ["+A0.0", f"+AM{m.group(1)}", f"+R{m.group(2)}", "-J"]
+
+
+def aa_label(name):
+    m = AA_RE.match(name)
+    return f"POV-Ray +AM{m.group(1)} +R{m.group(2)}"
+
+
+# ---- the steps -----------------------------------------------------------------------
+
+class Pipeline:
+    def __init__(self, cfg, tools):
+        self.cfg = cfg
+        self.tools = tools  # {"siproject": path, "simetrics": path, "*_sha": ...}
+        self.digest = Digests(os.path.join(cfg.work, ".digests.json"))
+        self.render_sh = os.path.join(HERE, "render.sh")
+        self.ini = os.path.join(ROOT, "scenes", "povray.ini")
+        self.scratch = tempfile.mkdtemp(prefix="compare-scratch.", dir=cfg.work)
+        self.counts = {"render": 0, "project": 0, "measure": 0, "reused": 0}
+        # Representative method of each approximation (the first with its key).
+        self.rep = {}
+        for name, opts in cfg.methods:
+            self.rep.setdefault(approximation_key(opts), name)
+
+    def close(self):
+        shutil.rmtree(self.scratch, ignore_errors=True)
+        self.digest.save()
+
+    # -- renders --
+    def render(self, scene, tag, width, height, povopts):
+        cfg = self.cfg
+        pov = os.path.join(cfg.scenedir, scene + ".pov")
+        out = os.path.join(cfg.work, "render", f"{scene}-{cfg.res_tag}-{tag}.exr")
+        side = out[:-4] + ".json"
+        stamp = {"schema": SCHEMA, "scene": self.digest(pov), "ini": self.digest(self.ini),
+                 "size": [width, height], "options": povopts}
+        info = fresh(side, stamp, [out])
+        if info:
+            self.counts["reused"] += 1
+            return out, info
+        os.makedirs(os.path.dirname(out), exist_ok=True)
+        say(f"render   {scene:<10} {tag:<8} {width} x {height}  {' '.join(povopts)}".rstrip())
+        walls, loads, stats = [], [], {}
+        for k in range(cfg.repeats):
+            target = out if k == 0 else os.path.join(self.scratch, f"repeat-{k}.exr")
+            loads.append(load_average())
+            t0 = time.perf_counter()
+            _, err = run(["bash", self.render_sh, pov, target, str(width), str(height)] + povopts + ["+GS"],
+                         f"rendering {rel(pov)} ({tag}, {width} x {height})")
+            walls.append(time.perf_counter() - t0)
+            if k == 0:
+                stats = povray_stats(err)
+            else:
+                remove(target)
+            if walls[-1] >= cfg.repeat_below:
+                break
+        if "pixels_traced" in stats:
+            rays = (stats["pixels_traced"] + stats["samples"]) / (width * height)
+        else:
+            rays = None
+        info = {"stamp": stamp, "file": os.path.relpath(out, cfg.work), "width": width, "height": height,
+                "wall_s": min(walls), "wall_runs": walls, "load_before": loads,
+                "primary_rays_per_pixel": rays, "digest": self.digest(out), **stats}
+        write_json(side, info)
+        self.counts["render"] += 1
+        say(f"         {min(walls):.2f} s wall ({len(walls)} run(s)), "
+            f"{'%.2f' % rays if rays is not None else '?'} primary rays per pixel")
+        return out, info
+
+    def factor_render(self, scene, factor):
+        w, h = render_size(self.cfg, factor)
+        opts = [f"Declare=ZP_K={self.cfg.zp_k}"] if scene == "zoneplate" else []
+        return self.render(scene, "f" + fmt_factor(factor), w, h, opts)
+
+    def aa_render(self, scene, aa):
+        opts = ([f"Declare=ZP_K={self.cfg.zp_k}"] if scene == "zoneplate" else []) + aa_options(aa)
+        return self.render(scene, "aa-" + aa, self.cfg.w, self.cfg.h, opts)
+
+    # -- projections --
+    def project(self, scene, factor, method, render, rinfo):
+        cfg = self.cfg
+        opts = shlex.split(cfg.method_opts[method])
+        d = os.path.join(cfg.work, scene, "f" + fmt_factor(factor))
+        exr = os.path.join(d, method + ".exr")
+        rep = self.rep[approximation_key(cfg.method_opts[method])] == method
+        coeffs = os.path.join(d, method + ".coeffs.exr") if rep else None
+        side = os.path.join(d, method + ".json")
+        size = f"{cfg.w}x{cfg.h}"
+        stamp = {"schema": SCHEMA, "render": rinfo["digest"], "siproject": self.tools["siproject_sha"],
+                 "size": size, "options": opts, "coeffs": rep}
+        outputs = [exr] + ([coeffs] if coeffs else [])
+        info = fresh(side, stamp, outputs)
+        if info:
+            self.counts["reused"] += 1
+            return info
+        os.makedirs(d, exist_ok=True)
+        base = [self.tools["siproject"], render, "--size", size] + opts
+        what = f"siproject {method} on {rel(render)}"
+        t_exr = temp_name(exr, ".exr")
+        t_coeffs = temp_name(coeffs, ".exr") if coeffs else None
+        try:
+            totals, loads, log_text = [], [], ""
+            for k in range(cfg.repeats):
+                target = t_exr if k == 0 else os.path.join(self.scratch, "timing.exr")
+                loads.append(load_average())
+                _, err = run(base + ["-o", target, "-v"], what)
+                totals.append(siproject_total(err, what))
+                if k == 0:
+                    log_text = err
+            if coeffs:
+                run(base + ["-o", os.path.join(self.scratch, "coeffs-run.exr"), "--coeffs", t_coeffs, "-q"], what)
+            settle(t_exr, exr)
+            if coeffs:
+                settle(t_coeffs, coeffs)
+        finally:
+            remove(t_exr, *( [t_coeffs] if t_coeffs else []))
+        info = {"stamp": stamp, "project_s": min(totals), "project_runs": totals, "load_before": loads,
+                "log": log_text.strip().splitlines(), "digest": self.digest(exr),
+                "coeffs_digest": self.digest(coeffs) if coeffs else None,
+                "command": shlex.join([rel(x) if os.path.isabs(x) else x for x in base])}
+        write_json(side, info)
+        self.counts["project"] += 1
+        say(f"project  {scene:<10} f{fmt_factor(factor):<7} {method:<13} {min(totals):.3f} s")
+        return info
+
+    def box_of(self, scene, name, src, srcinfo, extra, coeffs_too):
+        """SRC through siproject box (conventional) at the output size: the
+        reference display, or the baseline's coefficient file (factor 1)."""
+        cfg = self.cfg
+        d = os.path.join(cfg.work, scene, "ref" if name == "ref" else "aa")
+        out = os.path.join(d, (name + ".display.exr") if name == "ref" else (name + ".coeffs.exr"))
+        side = out[:-4] + ".json"
+        opts = ["--generator", "box", "--method", "conventional", "--display", "centred"] + extra
+        stamp = {"schema": SCHEMA, "input": srcinfo["digest"], "siproject": self.tools["siproject_sha"],
+                 "options": opts}
+        info = fresh(side, stamp, [out])
+        if info:
+            self.counts["reused"] += 1
+            return out, info
+        os.makedirs(d, exist_ok=True)
+        tmp = temp_name(out, ".exr")
+        try:
+            if coeffs_too:
+                run([self.tools["siproject"], src] + opts + ["-o", os.path.join(self.scratch, "box.exr"),
+                                                              "--coeffs", tmp, "-q"], f"siproject box on {rel(src)}")
+            else:
+                run([self.tools["siproject"], src] + opts + ["-o", tmp, "-q"], f"siproject box on {rel(src)}")
+            settle(tmp, out)
+        finally:
+            remove(tmp)
+        info = {"stamp": stamp, "digest": self.digest(out)}
+        write_json(side, info)
+        self.counts["project"] += 1
+        say(f"project  {scene:<10} {name:<8} box {'coefficients' if coeffs_too else 'pixel averages'}")
+        return out, info
+
+    # -- measures --
+    def measure(self, scene, key, image, image_digest, refdisp, refdisp_digest, inp, inp_digest,
+                coeffs=None, coeffs_digest=None, truth=None, truth_digest=None, zoneplate=False,
+                factor=None):
+        cfg = self.cfg
+        out = os.path.join(cfg.work, scene, key + ".metrics.json")
+        flags = ["--json", "--border", str(cfg.border), "--peak", "1"]
+        for c in cfg.cutoffs:
+            flags += ["--cutoff", repr(c)]
+        if factor is not None:
+            flags += ["--factor", repr(factor)]
+        use_zp = bool(coeffs) and zoneplate
+        stamp = {"schema": SCHEMA, "simetrics": self.tools["simetrics_sha"], "flags": flags,
+                 "image": image_digest, "reference": refdisp_digest, "input": inp_digest,
+                 "coeffs": coeffs_digest if coeffs else None,
+                 "truth": truth_digest if (coeffs and not use_zp) else None,
+                 "zoneplate": [cfg.zp_k, self.zp_spp()] if use_zp else None}
+        args = flags + ["--reference", refdisp, "--input", inp]
+        info = fresh(out, stamp, [])
+        if info:
+            self.counts["reused"] += 1
+            return info["metrics"]
+        if coeffs:
+            args += ["--coeffs", coeffs]
+            if use_zp:
+                args += ["--zoneplate", cfg.zp_k, "--samples-per-pixel", str(self.zp_spp())]
+            else:
+                args += ["--truth", truth]
+        t0 = time.perf_counter()
+        text, _ = run([self.tools["simetrics"], image] + args, f"simetrics on {rel(image)}")
+        try:
+            metrics = json.loads(text)
+        except ValueError:
+            raise CompareError(f"simetrics on {rel(image)} printed no JSON: {text[:200]}")
+        write_json(out, {"stamp": stamp, "metrics": metrics})
+        self.counts["measure"] += 1
+        say(f"measure  {scene:<10} {key:<22} {time.perf_counter() - t0:.1f} s")
+        return metrics
+
+    def zp_spp(self):
+        return int(min(32, max(8, round(self.cfg.ref_factor))))
+
+
+def snapshot_tools(cfg, folder):
+    tools = {}
+    for name in ("siproject", "simetrics"):
+        src = getattr(cfg, name)
+        if not (os.path.isfile(src) and os.access(src, os.X_OK)):
+            raise CompareError(f"{name} not found or not executable: {src} (run make build, or pass its path)")
+        dst = os.path.join(folder, name)
+        shutil.copy2(src, dst)
+        with open(dst, "rb") as f:
+            tools[name + "_sha"] = hashlib.sha256(f.read()).hexdigest()[:16]
+        tools[name] = dst
+    if shutil.which("povray") is None:
+        raise CompareError("povray not found on PATH (run scripts/setup.sh)")
+    return tools
+
+
+def number(x):
+    return x if isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) else None
+
+
+def row_from(metrics, cutoffs):
+    row = {}
+    for c in cutoffs:
+        key = "hp_" + format(c, "g")
+        row[key] = number(metrics.get(key))
+    row["rms"] = number(metrics.get("rms"))
+    row["psnr"] = number(metrics.get("psnr"))
+    ov = metrics.get("overshoot") or {}
+    for k in ("max_overshoot", "max_undershoot", "pixels_out_of_range", "negative_pixels",
+              "negative_energy", "min", "max", "pixels"):
+        row["ov_" + k if k in ("min", "max", "pixels") else k] = number(ov.get(k))
+    cont = metrics.get("continuous") or {}
+    row["l2"] = number(cont.get("l2_error"))
+    return row
+
+
+def run_pipeline(cfg, pipe):
+    rows, refs = [], {}
+    for scene in cfg.scenes:
+        # Renders first (the expensive part), the reference last among them.
+        renders = {f: pipe.factor_render(scene, f) for f in cfg.factors}
+        aas = {a: pipe.aa_render(scene, a) for a in cfg.aa}
+        ref, refinfo = pipe.render(scene, "f" + fmt_factor(cfg.ref_factor), *render_size(cfg, cfg.ref_factor),
+                                   [f"Declare=ZP_K={cfg.zp_k}"] if scene == "zoneplate" else [])
+        refdisp, refdinfo = pipe.box_of(scene, "ref", ref, refinfo, ["--size", f"{cfg.w}x{cfg.h}"], False)
+        refs[scene] = {"render": os.path.relpath(ref, cfg.work), "render_s": refinfo["wall_s"],
+                       "width": refinfo["width"], "height": refinfo["height"],
+                       "display": os.path.relpath(refdisp, cfg.work)}
+        zp = scene == "zoneplate"
+        for f in cfg.factors:
+            render, rinfo = renders[f]
+            for method in cfg.method_names:
+                pinfo = pipe.project(scene, f, method, render, rinfo)
+                d = os.path.join(cfg.work, scene, "f" + fmt_factor(f))
+                rep = pipe.rep[approximation_key(cfg.method_opts[method])]
+                coeffs = os.path.join(d, rep + ".coeffs.exr") if rep == method else None
+                m = pipe.measure(scene, f"f{fmt_factor(f)}/{method}", os.path.join(d, method + ".exr"),
+                                 pinfo["digest"], refdisp, refdinfo["digest"], render, rinfo["digest"],
+                                 coeffs, pinfo.get("coeffs_digest"), ref, refinfo["digest"], zp, f)
+                row = {"scene": scene, "kind": "method", "method": method, "factor": f,
+                       "rays_per_pixel": f * f, "render_s": rinfo["wall_s"],
+                       "render_trace_s": rinfo.get("trace_s"),
+                       "project_s": pinfo["project_s"], "total_s": rinfo["wall_s"] + pinfo["project_s"],
+                       "image": os.path.relpath(os.path.join(d, method + ".exr"), cfg.work),
+                       "render": os.path.relpath(render, cfg.work),
+                       "l2_shared_with": None if rep == method else rep,
+                       "options": cfg.method_opts[method]}
+                row.update(row_from(m, cfg.cutoffs))
+                if zp and f == cfg.show_factor and coeffs:
+                    # Cross-check: the same error against the reference render instead of the closed form.
+                    m2 = pipe.measure(scene, f"f{fmt_factor(f)}/{method}.truth-render",
+                                      os.path.join(d, method + ".exr"), pinfo["digest"], refdisp,
+                                      refdinfo["digest"], render, rinfo["digest"], coeffs,
+                                      pinfo.get("coeffs_digest"), ref, refinfo["digest"], False, f)
+                    row["l2_against_render"] = number((m2.get("continuous") or {}).get("l2_error"))
+                rows.append(row)
+        for a in cfg.aa:
+            render, rinfo = aas[a]
+            coeffs, cinfo = pipe.box_of(scene, a, render, rinfo, ["--factor", "1"], True)
+            m = pipe.measure(scene, f"aa/{a}", render, rinfo["digest"], refdisp, refdinfo["digest"], ref,
+                             refinfo["digest"], coeffs, cinfo["digest"], ref, refinfo["digest"], zp)
+            row = {"scene": scene, "kind": "pov-aa", "method": "pov-" + a, "factor": None,
+                   "rays_per_pixel": rinfo.get("primary_rays_per_pixel"), "render_s": rinfo["wall_s"],
+                   "render_trace_s": rinfo.get("trace_s"),
+                   "project_s": 0.0, "total_s": rinfo["wall_s"],
+                   "image": os.path.relpath(render, cfg.work), "render": os.path.relpath(render, cfg.work),
+                   "l2_shared_with": None, "options": " ".join(aa_options(a)), "label": aa_label(a)}
+            row.update(row_from(m, cfg.cutoffs))
+            rows.append(row)
+        pipe.digest.save()
+    for r in rows:
+        if r["l2_shared_with"]:
+            src = next(x for x in rows if x["scene"] == r["scene"] and x["factor"] == r["factor"]
+                       and x["method"] == r["l2_shared_with"])
+            r["l2"] = src["l2"]
+            if "l2_against_render" in src:
+                r["l2_against_render"] = src["l2_against_render"]
+    return rows, refs
+
+
+def main(argv):
+    try:
+        cfg = parse_args(argv)
+    except CompareError as e:
+        log(str(e))
+        return 2
+    t_start = time.time()
+    pipe = None
+    try:
+        os.makedirs(cfg.work, exist_ok=True)
+        bindir = tempfile.mkdtemp(prefix="compare-bin.", dir=cfg.work)
+        try:
+            tools = snapshot_tools(cfg, bindir)
+            pipe = Pipeline(cfg, tools)
+            say(f"compare ({cfg.label}): {len(cfg.scenes)} scene(s), {cfg.w} x {cfg.h}, factors "
+                f"{' '.join(map(fmt_factor, cfg.factors))}, reference factor {fmt_factor(cfg.ref_factor)}, "
+                f"{len(cfg.method_names)} methods, {len(cfg.aa)} POV-Ray baselines; work {rel(cfg.work)}")
+            rows, refs = run_pipeline(cfg, pipe)
+            pipe.close()
+        finally:
+            shutil.rmtree(bindir, ignore_errors=True)
+        meta = {
+            "label": cfg.label, "scenes": cfg.scenes, "width": cfg.w, "height": cfg.h,
+            "factors": cfg.factors, "ref_factor": cfg.ref_factor, "aa": cfg.aa,
+            "aa_labels": {("pov-" + a): aa_label(a) for a in cfg.aa},
+            "methods": cfg.method_names, "method_options": cfg.method_opts,
+            "shares_f_app": {m: pipe.rep[approximation_key(o)] for m, o in cfg.methods
+                             if pipe.rep[approximation_key(o)] != m},
+            "border": cfg.border, "cutoffs": cfg.cutoffs, "show_factor": cfg.show_factor,
+            "zp_k": float(cfg.zp_k), "zp_samples_per_pixel": pipe.zp_spp(), "repeats": cfg.repeats,
+            "repeat_below_s": cfg.repeat_below,
+            "tools": {k: v for k, v in tools.items() if k.endswith("_sha")},
+            "povray": povray_version(), "nproc": os.cpu_count(),
+            "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
+            "steps": dict(pipe.counts), "pipeline_s": time.time() - t_start,
+            "references": refs,
+        }
+        sys.path.insert(0, HERE)
+        import report_compare
+        report_compare.build(cfg.report, cfg.work, meta, rows)
+        say(f"compare: report {rel(os.path.join(cfg.report, 'index.html'))} "
+            f"({pipe.counts['render']} renders, {pipe.counts['project']} projections, "
+            f"{pipe.counts['measure']} measures made, {pipe.counts['reused']} reused; "
+            f"{time.time() - t_start:.0f} s)")
+        return 0
+    except CompareError as e:
+        log("error: " + str(e))
+        return 1
+    except KeyboardInterrupt:
+        log("interrupted")
+        return 130
+    finally:
+        if pipe is not None:
+            shutil.rmtree(pipe.scratch, ignore_errors=True)
+
+
+def povray_version():
+    try:
+        r = subprocess.run(["povray", "--version"], capture_output=True, text=True, stdin=subprocess.DEVNULL)
+        for line in (r.stdout + r.stderr).splitlines():
+            if line.startswith("POV-Ray"):
+                return line.strip()
+    except OSError:
+        pass
+    return "?"
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
