@@ -3,6 +3,9 @@
 #                    and form its images, one per method, then print a summary
 #   make all-scenes  the same for every scene in scenes/
 #   make test        set up, build, run every test (ctest)
+#   make compare     accuracy against speed, every scene and method: out/report/
+#   make stability   where the methods fail: out/report/stability/
+#   make bench       speed and memory against oiiotool and splineops: out/bench/
 #   make clean       remove the build folder and out/
 #
 # Variables (make VAR=value):
@@ -237,7 +240,6 @@ stability: $(if $(PREBUILT),,build)
 # COMPARE_* variables override the sizes: COMPARE_SCENES, COMPARE_RES,
 # COMPARE_FACTORS, COMPARE_REF_FACTOR, COMPARE_AA, COMPARE_BORDER,
 # COMPARE_REPEATS (timing runs, smallest kept).
-PYTHON ?= .venv/bin/python
 ifneq ($(QUICK),)
 COMPARE_SCENES     ?= checker edges zoneplate
 COMPARE_RES        ?= 64
@@ -269,14 +271,19 @@ compare: $(if $(PREBUILT),,build)
 	  --border $(COMPARE_BORDER) --cutoffs '$(CUTOFFS)' --repeats $(COMPARE_REPEATS) \
 	  --zp-nyquist $(ZP_NYQUIST) --siproject $(SIPROJECT) --simetrics $(SIMETRICS) \
 	  $(foreach m,$(METHODS),--method '$(m)=$(METHOD_OPTS_$(m))')
+	@$(if $(and $(filter full,$(COMPARE_LABEL)),$(filter $(OUT)/report,$(COMPARE_REPORT))),$(PYTHON) scripts/readme_section.py README.md results $(COMPARE_REPORT)/README-results.md,true)
 # ==== end of comparison ========================================================
 
 # ---- bench: siproject against oiiotool, splineops and the decode floor ---------
 # make bench [QUICK=1]: out/bench/bench.md and bench.csv (scripts/bench.py);
-# the input renders (objects at 8000^2, checker at 16000^2) are made once.
+# the input renders (objects at 8000^2, checker at 16000^2) are made once;
+# the full run also rewrites README.md's Performance section. BENCHFLAGS: more
+# options (--runs 5, --wait-idle 30, --no-big; scripts/bench.py --help).
+BENCHFLAGS ?=
 .PHONY: bench microbench
 bench: $(if $(PREBUILT),,build)
-	@$(PYTHON) scripts/bench.py --build $(BUILD) --outdir $(OUT)/bench $(if $(QUICK),--quick) $(BENCHFLAGS)
+	@$(PYTHON) scripts/bench.py --build $(BUILD) --outdir $(OUT)/bench --siproject $(SIPROJECT) $(if $(QUICK),--quick) $(BENCHFLAGS)
+	@$(if $(QUICK),true,$(PYTHON) scripts/readme_section.py README.md performance $(OUT)/bench/bench.md 2)
 
 # Google Benchmark microbenchmarks of acquisition, prefilter and resampling.
 microbench: $(if $(PREBUILT),,build)

@@ -77,12 +77,22 @@ def esc(s):
     return html.escape(str(s), quote=True)
 
 
-def is_min_error(meta, m):
-    return "min-error" in meta["method_options"].get(m, "")
+CONVENTIONAL_ONLY = ("mitchell", "gaussian", "catmull-rom", "lanczos3")
 
 
 def is_conventional(meta, m):
-    return "conventional" in meta["method_options"].get(m, "") or m in ("mitchell",)
+    """siproject's rule: --method conventional, or a conventional-only filter
+    named alone; anything else is min-error (its default)."""
+    words = meta["method_options"].get(m, "").replace("=", " ").split()
+    method = words[words.index("--method") + 1] if "--method" in words[:-1] else None
+    generator = words[words.index("--generator") + 1] if "--generator" in words[:-1] else None
+    if method is not None:
+        return method == "conventional"
+    return generator in CONVENTIONAL_ONLY
+
+
+def is_min_error(meta, m):
+    return m in meta["method_options"] and not is_conventional(meta, m)
 
 
 def is_centred(meta, m):
@@ -1019,7 +1029,10 @@ def build(report, work, meta, rows):
         rp = os.path.abspath(report)
         prefix = (os.path.relpath(rp, root) + "/") if rp.startswith(root + os.sep) else ""
         write(tmp, "README-results.md", readme_md(meta, d, prefix))
-        write(tmp, "index.html", build_html(meta, rows, d, charts, scene_cards, files))
+        # The stability study (make stability) lives beside the report: linked when there.
+        linked = files + (["stability/index.html"]
+                          if os.path.exists(os.path.join(report, "stability", "index.html")) else [])
+        write(tmp, "index.html", build_html(meta, rows, d, charts, scene_cards, linked))
         # Into place: the asset folder swapped as a whole, then each file
         # (atomic renames; index.html last). Other files of REPORT are left alone.
         os.makedirs(report, exist_ok=True)

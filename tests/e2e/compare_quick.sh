@@ -30,6 +30,11 @@ report=$out/report-quick
 failures=0
 fail() { echo "FAIL: $*" >&2; failures=$((failures + 1)); }
 die() { echo "FAIL: $*" >&2; exit 1; }
+# Private copies: a rebuild of the tree during the test cannot change the
+# binaries between the runs (the second run must find nothing to remake).
+mkdir "$tmp/bin"
+cp "$siproject" "$tmp/bin/siproject" && cp "$simetrics" "$tmp/bin/simetrics" || die "cannot copy the binaries"
+siproject=$tmp/bin/siproject simetrics=$tmp/bin/simetrics
 mk() {
   local log=$1; shift
   make -C "$src" --no-print-directory OUT="$out" SIPROJECT="$siproject" SIMETRICS="$simetrics" \
