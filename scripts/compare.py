@@ -48,6 +48,7 @@ import os
 import re
 import shlex
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -680,7 +681,12 @@ def run_pipeline(cfg, pipe):
     return rows, refs
 
 
+def on_term(signum, frame):
+    raise SystemExit(128 + signum)  # so that the temporary files are removed
+
+
 def main(argv):
+    signal.signal(signal.SIGTERM, on_term)
     try:
         cfg = parse_args(argv)
     except CompareError as e:
