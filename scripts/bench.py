@@ -551,26 +551,26 @@ def targets(rows, threads, micro):
 
 def parse_args():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+                                 formatter_class=argparse.HelpFormatter)
     ap.add_argument("--quick", action="store_true", default=os.environ.get("QUICK") == "1",
                     help="small input, one run each (also QUICK=1 in the environment)")
-    ap.add_argument("--scene", default="objects", help="scene of the input render: scenes/SCENE.pov")
+    ap.add_argument("--scene", default="objects", help="scene of the input render: scenes/SCENE.pov (default objects)")
     ap.add_argument("--render-size", type=int, default=None, help="input render size N (N x N); default 8000, quick 1000")
     ap.add_argument("--out-size", type=int, default=None, help="output size N (N x N); default 1000, quick 250")
     ap.add_argument("--runs", type=int, default=None, help="rounds (median over them); default 3, quick 1")
-    ap.add_argument("--big-scene", default="checker", help="scene of the peak-memory-at-scale input")
+    ap.add_argument("--big-scene", default="checker", help="scene of the input at scale, for peak memory (default checker)")
     ap.add_argument("--big-size", type=int, default=None, help="its render size; default 16000, quick 2000")
     ap.add_argument("--no-big", action="store_true", help="skip the input at scale")
     ap.add_argument("--wait-idle", type=float, default=0, metavar="S",
                     help="before each timed run, wait up to S seconds for other work to leave "
                          f"the cores idle (under {IDLE_BELOW} busy); for shared machines")
-    ap.add_argument("--outdir", default=os.path.join(ROOT, "out", "bench"), help="renders and results")
-    ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="build folder of the C++ tools")
+    ap.add_argument("--outdir", default=os.path.join(ROOT, "out", "bench"), help="renders and results (default out/bench)")
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="build folder of the C++ tools (default build)")
     ap.add_argument("--siproject", default=None, help="siproject binary (default BUILD/tools/siproject)")
     ap.add_argument("--sidecode", default=None, help="sidecode binary (default BUILD/tools/sidecode)")
     ap.add_argument("--microbench", default=None, help="microbench binary (default BUILD/tests/microbench)")
     ap.add_argument("--python", default=os.path.join(ROOT, ".venv", "bin", "python"),
-                    help="Python with splineops and OpenEXR (the project's .venv)")
+                    help="Python with splineops and OpenEXR (default: the project's .venv)")
     args = ap.parse_args()
     q = args.quick
     args.render_size = args.render_size or (1000 if q else 8000)
