@@ -272,6 +272,12 @@ compare: $(if $(PREBUILT),,build)
 	  --zp-nyquist $(ZP_NYQUIST) --siproject $(SIPROJECT) --simetrics $(SIMETRICS) \
 	  $(foreach m,$(METHODS),--method '$(m)=$(METHOD_OPTS_$(m))')
 	@$(if $(and $(filter full,$(COMPARE_LABEL)),$(filter $(OUT)/report,$(COMPARE_REPORT))),$(PYTHON) scripts/readme_section.py README.md results $(COMPARE_REPORT)/README-results.md,true)
+# make compare-hex: the hexagonal lattice against the Cartesian one at equal
+# coefficient count (density 1), every scene, factors 2 and 4: $(OUT)/report/hex/.
+.PHONY: compare-hex
+compare-hex:
+	@$(MAKE) compare METHODS="me-tent me-cubic hex-hat hex-quartic" COMPARE_FACTORS="2 4" \
+	  COMPARE_AA=am1-r2 COMPARE_REPEATS=1 COMPARE_REPORT=$(OUT)/report/hex
 # ==== end of comparison ========================================================
 
 # ---- bench: siproject against oiiotool, splineops and the decode floor ---------

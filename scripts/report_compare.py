@@ -1029,9 +1029,10 @@ def build(report, work, meta, rows):
         rp = os.path.abspath(report)
         prefix = (os.path.relpath(rp, root) + "/") if rp.startswith(root + os.sep) else ""
         write(tmp, "README-results.md", readme_md(meta, d, prefix))
-        # The stability study (make stability) lives beside the report: linked when there.
-        linked = files + (["stability/index.html"]
-                          if os.path.exists(os.path.join(report, "stability", "index.html")) else [])
+        # So do the stability study (make stability) and the hexagonal
+        # comparison (make compare-hex): linked when there.
+        linked = files + [f"{sub}/index.html" for sub in ("stability", "hex")
+                          if os.path.exists(os.path.join(report, sub, "index.html"))]
         write(tmp, "index.html", build_html(meta, rows, d, charts, scene_cards, linked))
         # Into place: the asset folder swapped as a whole, then each file
         # (atomic renames; index.html last). Other files of REPORT are left alone.
