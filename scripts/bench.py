@@ -54,6 +54,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from atomic import write_atomic  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -387,26 +388,6 @@ def build_rows(competitors, big):
             "command": c["display"],
         })
     return rows
-
-
-def write_atomic(path, text):
-    d = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", dir=d)
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.chmod(tmp, 0o666 & ~current_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-def current_umask():
-    m = os.umask(0)
-    os.umask(m)
-    return m
 
 
 def csv_text(rows, meta):

@@ -53,6 +53,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from atomic import write_atomic  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -91,27 +92,6 @@ def rel(path):
 
 
 # ---- files -----------------------------------------------------------------------
-
-def current_umask():
-    m = os.umask(0)
-    os.umask(m)
-    return m
-
-
-def write_atomic(path, text):
-    d = os.path.dirname(os.path.abspath(path))
-    os.makedirs(d, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", dir=d)
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.chmod(tmp, 0o666 & ~current_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
 
 def write_json(path, obj):
     write_atomic(path, json.dumps(obj, indent=1, sort_keys=True, allow_nan=False) + "\n")

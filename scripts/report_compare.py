@@ -33,6 +33,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import OpenEXR  # noqa: E402
 from PIL import Image, ImageDraw  # noqa: E402
 
+from atomic import current_umask  # noqa: E402
+
 # DESIGN.md section 4: the seed's high-pass shares (%), cutoff unpublished.
 SEED_HP = {"box": 16.56, "conv-tent": 15.19, "me-tent": 19.18, "mitchell": 15.50,
            "me-cubic": 17.41, "me-tent-2x2": 15.97, "me-cubic-2x2": 16.34}
@@ -1051,12 +1053,6 @@ def build(report, work, meta, rows):
             shutil.rmtree(old, ignore_errors=True)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-
-
-def current_umask():
-    m = os.umask(0)
-    os.umask(m)
-    return m
 
 
 def write(folder, name, text):
