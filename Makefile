@@ -189,7 +189,7 @@ $(OUT)/$(1)/summary.txt $(OUT)/$(1)/summary.csv &: $(foreach m,$(METHODS),$(OUT)
 	  --sizes '$(RES_W) $(RES_H) $(RENDER_W) $(RENDER_H)' --simetrics '$(SIMETRICS)' --cutoffs '$(CUTOFFS)' $(METHODS)
 endef
 
-# $(call method_rules,SCENE,METHOD): METHOD.exr (float), .png (8-bit sRGB) and
+# $(call method_rules,SCENE,METHOD): METHOD.exr (float, for the measures), .png (8-bit sRGB) and
 # .log (siproject -v: the stage times) from one render; written to temporary
 # names and renamed when both runs succeeded.
 define method_rules
@@ -198,7 +198,7 @@ $(OUT)/$(1)/.$(2).cmd: FORCE
 
 $(OUT)/$(1)/$(2).exr $(OUT)/$(1)/$(2).png $(OUT)/$(1)/$(2).log &: $(call inputs_of,$(1)) $(SIPROJECT) $(OUT)/$(1)/.$(2).cmd
 	@t=$(OUT)/$(1)/.$(2).tmp; \
-	$(call method_cmd_of,$(1),$(2)) -o $$$$t.exr -v 2>$$$$t.log && \
+	$(call method_cmd_of,$(1),$(2)) -o $$$$t.exr -d float -v 2>$$$$t.log && \
 	$(call method_cmd_of,$(1),$(2)) -o $$$$t.png -q || \
 	{ rc=$$$$?; cat $$$$t.log >&2; rm -f $$$$t.exr $$$$t.png $$$$t.log; exit $$$$rc; }; \
 	mv -f $$$$t.exr $(OUT)/$(1)/$(2).exr && mv -f $$$$t.png $(OUT)/$(1)/$(2).png && mv -f $$$$t.log $(OUT)/$(1)/$(2).log && \

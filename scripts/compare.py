@@ -458,7 +458,8 @@ class Pipeline:
             self.counts["reused"] += 1
             return info
         os.makedirs(d, exist_ok=True)
-        base = [self.tools["siproject"], render, "--size", size] + opts
+        # float output: the measures see the approximation, not half rounding
+        base = [self.tools["siproject"], render, "--size", size, "-d", "float"] + opts
         what = f"siproject {method} on {rel(render)}"
         t_exr = temp_name(exr, ".exr")
         t_coeffs = temp_name(coeffs, ".exr") if coeffs else None
@@ -494,7 +495,7 @@ class Pipeline:
         d = os.path.join(cfg.work, scene, "ref" if name == "ref" else "aa")
         out = os.path.join(d, (name + ".display.exr") if name == "ref" else (name + ".coeffs.exr"))
         side = out[:-4] + ".json"
-        opts = ["--generator", "box", "--method", "conventional", "--display", "centred"] + extra
+        opts = ["--generator", "box", "--method", "conventional", "--display", "centred", "-d", "float"] + extra
         stamp = {"schema": SCHEMA, "input": srcinfo["digest"], "siproject": self.tools["siproject_sha"],
                  "options": opts}
         info = fresh(side, stamp, [out])

@@ -86,7 +86,7 @@ class Tools:
                 fail(f"{t} is missing: run make build")
 
     def project(self, src, out, size, opts, coeffs=None):
-        cmd = [self.siproject, src, "-o", out, "--size", size, "-q", *opts]
+        cmd = [self.siproject, src, "-o", out, "--size", size, "-q", "-d", "float", *opts]
         if coeffs:
             cmd += ["--coeffs", coeffs]
         run(cmd)

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -38,6 +39,45 @@ void write_half(const std::string& path, const Image& img) {
 }
 
 }  // namespace
+
+TEST_F(Siproject, HalfSamplesConvertAsOpenImageIOConvertsThem) {
+  // Every half bit pattern, stored in a half EXR, read natively and converted
+  // by half_to_float (F16C where the processor has it), against OpenImageIO's
+  // own conversion of the same file.
+  std::vector<std::uint16_t> bits(65536);
+  for (std::size_t q = 0; q < bits.size(); ++q) bits[q] = std::uint16_t(q);
+  OIIO::ImageSpec spec(256, 256, 1, OIIO::TypeDesc::HALF);
+  auto out = OIIO::ImageOutput::create(path("all.exr"));
+  ASSERT_TRUE(out && out->open(path("all.exr"), spec) &&
+              out->write_image(OIIO::TypeDesc::HALF, bits.data()) && out->close());
+  ImageReader r(path("all.exr"));
+  ASSERT_TRUE(r.stores_half());
+  std::vector<float> theirs(65536), ours(65536);
+  std::vector<std::uint16_t> stored(65536);
+  r.read_rows(0, 256, theirs.data());
+  r.read_rows_half(0, 256, stored.data());
+  EXPECT_EQ(stored, bits);
+  half_to_float(stored.data(), ours.data(), 65533);  // a length that is not a whole vector
+  half_to_float(stored.data() + 65533, ours.data() + 65533, 3);
+  long nan = 0;
+  for (std::size_t q = 0; q < bits.size(); ++q) {
+    if (std::isnan(theirs[q])) {
+      EXPECT_TRUE(std::isnan(ours[q])) << q;
+      ++nan;
+      continue;
+    }
+    std::uint32_t a, b;
+    std::memcpy(&a, &theirs[q], 4);
+    std::memcpy(&b, &ours[q], 4);
+    EXPECT_EQ(a, b) << "half bits " << q;
+  }
+  EXPECT_EQ(nan, 2 * 1023);  // exponent all ones, mantissa not zero, both signs
+  // a float file has no half path
+  write_image(path("f.exr"), random_image(4, 4, 1, 1));
+  ImageReader f(path("f.exr"));
+  EXPECT_FALSE(f.stores_half());
+  EXPECT_THROW(f.read_rows_half(0, 4, stored.data()), std::logic_error);
+}
 
 TEST_F(Siproject, AgreesWithTheLibrary) {
   const Image in = random_image(64, 48, 3, 1);
@@ -98,7 +138,8 @@ TEST_F(Siproject, CoefficientRoundTripEqualsDirectResult) {
 }
 
 TEST_F(Siproject, EveryChannelCountAndHalfInput) {
-  for (int channels : {1, 2, 4, 5}) {
+  // 3 and 4 channels take the vectorised paths, the others the scalar ones
+  for (int channels : {1, 2, 3, 4, 5}) {
     const Image in = random_image(40, 40, channels, channels);
     write_half(path("in.exr"), in);
     const Result r = run(path("in.exr") + " -o " + path("out.exr") + " --factor 2 -q");
@@ -108,14 +149,27 @@ TEST_F(Siproject, EveryChannelCountAndHalfInput) {
     EXPECT_EQ(out.width(), 20);
     EXPECT_EQ(out.attribute("sis:method"), "min-error");
     EXPECT_EQ(out.attribute("sis:display"), "2x2");
-    // half input read into float: equals projecting the half-rounded samples
+    // half input: equals projecting the half samples read as float ...
     const Image half = read_image(path("in.exr"));
     ProjectionOptions o;
     Coefficients k = project(half, 20, 20, o);
     for (double& v : k.c.data) v = static_cast<float>(v);
     const Image ref = final_image(k, Display::antialiased_2x2(), 20, 20);
-    EXPECT_EQ(read_image(path("out.exr")).data, ref.data);
+    // ... stored as half by default, as the input (oiiotool's habit) ...
+    EXPECT_TRUE(out.stores_half());
+    write_image(path("ref.exr"), ref, {}, {}, -1, SampleFormat::Half);
+    EXPECT_EQ(read_image(path("out.exr")).data, read_image(path("ref.exr")).data) << channels;
+    // ... and bit for bit as float with -d float
+    ASSERT_EQ(run(path("in.exr") + " -o " + path("outf.exr") + " --factor 2 -q -d float").status, 0);
+    EXPECT_FALSE(ImageReader(path("outf.exr")).stores_half());
+    EXPECT_EQ(read_image(path("outf.exr")).data, ref.data) << channels;
   }
+  // a float input gives a float output; -d half makes it half
+  write_image(path("inf.exr"), random_image(40, 40, 3, 7));
+  ASSERT_EQ(run(path("inf.exr") + " -o " + path("o1.exr") + " --factor 2 -q").status, 0);
+  EXPECT_FALSE(ImageReader(path("o1.exr")).stores_half());
+  ASSERT_EQ(run(path("inf.exr") + " -o " + path("o2.exr") + " --factor 2 -q -d half").status, 0);
+  EXPECT_TRUE(ImageReader(path("o2.exr")).stores_half());
 }
 
 TEST_F(Siproject, BitIdenticalForAnyThreadCount) {
@@ -197,6 +251,8 @@ TEST_F(Siproject, BadInputGetsAClearErrorAndLosesNothing) {
       {in + out, 2, "give the output size"},
       {in + out + " --factor 2 --boundary clamp", 2, "unknown boundary rule 'clamp'"},
       {in + out + " --factor -2", 2, "--factor"},
+      {in + out + " --factor 2 -d double", 2, "-d/--data-format: sample format 'double'"},
+      {in + " -o " + path("out.png") + " --factor 2 -d half", 2, "is an 8-bit format"},
   };
   for (const Case& c : cases) {
     const Result r = run(c.args);

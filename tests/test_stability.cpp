@@ -39,13 +39,24 @@ TEST(HighlightCompression, IsOpenImageIOsCurveAndInvertible) {
 }
 
 TEST(LocalRange, MatchesBruteForceAtAnyRatio) {
+  // 3 and 4 channels take the vectorised path, the others the scalar ones
+  for (int C : {1, 2, 3, 4, 5})
   for (auto [win, hin, W, H] : {std::array<long, 4>{37, 23, 10, 6}, {8, 8, 20, 13}, {40, 40, 10, 10}}) {
-    std::mt19937 rng(win);
+    std::mt19937 rng(win + C);
     std::uniform_real_distribution<float> u(-1, 1);
-    Image in(win, hin, 2);
+    Image in(win, hin, C);
     for (float& v : in.data) v = u(rng);
-    LocalRange lr(win, hin, 2, W, H);
+    LocalRange lr(win, hin, C, W, H);
     for (long y = 0; y < hin; y += 5) lr.add_rows(y, std::min(hin, y + 5), in.row(y));
+    // the same in two steps, rows reduced in any order, folded by columns
+    LocalRange split(win, hin, C, W, H);
+    const long E = split.row_entries();
+    std::vector<float> lo(hin * E), hi(hin * E);
+    for (long y = hin - 1; y >= 0; --y) split.reduce_row(in.row(y), &lo[y * E], &hi[y * E]);
+    for (long k0 = 0; k0 < E; k0 += 7)
+      split.add_reduced(0, hin, lo.data(), hi.data(), k0, std::min(E, k0 + 7));
+    EXPECT_EQ(split.min().data, lr.min().data);
+    EXPECT_EQ(split.max().data, lr.max().data);
     // per axis: the samples inside the pixel's interval, or the nearest one
     auto inside = [](long i, long samples, long count, long p) {
       const double x = (i + 0.5) * count / samples;
@@ -63,7 +74,7 @@ TEST(LocalRange, MatchesBruteForceAtAnyRatio) {
     };
     for (long m = 0; m < H; ++m)
       for (long n = 0; n < W; ++n)
-        for (int c = 0; c < 2; ++c) {
+        for (int c = 0; c < C; ++c) {
           float lo = 1e9f, hi = -1e9f;
           for (long j = 0; j < hin; ++j)
             for (long i = 0; i < win; ++i)
@@ -71,8 +82,8 @@ TEST(LocalRange, MatchesBruteForceAtAnyRatio) {
                 lo = std::min(lo, in.at(i, j, c));
                 hi = std::max(hi, in.at(i, j, c));
               }
-          EXPECT_EQ(lr.min().at(n, m, c), lo) << win << " " << W;
-          EXPECT_EQ(lr.max().at(n, m, c), hi) << win << " " << W;
+          EXPECT_EQ(lr.min().at(n, m, c), lo) << win << " " << W << " " << C;
+          EXPECT_EQ(lr.max().at(n, m, c), hi) << win << " " << W << " " << C;
         }
   }
 }

@@ -9,6 +9,7 @@
 #include <cfloat>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <future>
 #include <iostream>
@@ -39,6 +40,7 @@ struct Options {
   std::string size;
   std::string generator = "cubic", method = "min-error", display, boundary = "mirror";
   std::string nonfinite = "error", prefilter = "fft", clamp = "none";
+  std::string data_format;  // "": the input's
   bool highlight_compress = false;
   std::string lattice = "cartesian", quadrature = "point";
   double density = 1.0;
@@ -67,6 +69,19 @@ bool same_file(const std::string& a, const std::string& b) {
   std::error_code ec1, ec2;
   const fs::path pa = fs::weakly_canonical(a, ec1), pb = fs::weakly_canonical(b, ec2);
   return !ec1 && !ec2 && pa == pb;
+}
+
+// True when no sample is NaN or infinite. A branch-free scan of the bits
+// (exponent all ones plus one carries into the sign bit) that compilers
+// vectorise: the common case costs little.
+bool all_finite(const float* v, std::size_t n) {
+  std::uint32_t carry = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    std::uint32_t u;
+    std::memcpy(&u, v + q, sizeof u);
+    carry |= (u & 0x7f800000u) + 0x00800000u;
+  }
+  return !(carry & 0x80000000u);
 }
 
 class Progress {
@@ -161,6 +176,17 @@ int run(const Options& o) {
     if (!o.coeffs.empty() && same_file(in, o.coeffs))
       throw UsageError("--coeffs " + o.coeffs + " is the input file");
   }
+  std::optional<SampleFormat> data_format;
+  if (!o.data_format.empty()) {
+    try {
+      data_format = parse_sample_format(o.data_format);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("-d/--data-format: ") + e.what());
+    }
+    if (is_8bit_format(o.output))
+      throw UsageError("-d/--data-format " + o.data_format + ": " + o.output +
+                       " is an 8-bit format; the sample format applies to EXR and other float outputs");
+  }
   if (!o.coeffs.empty() && same_file(o.output, o.coeffs))
     throw UsageError("--coeffs " + o.coeffs + " is the output file");
   for (const std::string& path : {o.output, o.coeffs}) {
@@ -224,6 +250,16 @@ int run(const Options& o) {
     return {ow, oh};
   };
 
+  // Output samples as the input's (oiiotool's habit): half when every input
+  // stores half, float otherwise.
+  const SampleFormat out_format =
+      data_format ? *data_format
+                  : std::all_of(readers.begin(), readers.end(), [](const auto& r) { return r->stores_half(); })
+                        ? SampleFormat::Half
+                        : SampleFormat::Float;
+  const std::string input_label =
+      fs::path(reader.path()).filename().string() +
+      (readers.size() > 1 ? " and " + std::to_string(readers.size() - 1) + " more bands" : "");
   Coefficients k;
   double t_acquire = 0, t_prefilter = 0;
   long W, H;
@@ -290,9 +326,23 @@ int run(const Options& o) {
       }
       g += r->height();
     }
-    // Two strip buffers: the next strip is decoded while this one is acquired.
-    std::vector<float> rows[2] = {std::vector<float>(std::size_t(strip) * win * C),
-                                  std::vector<float>(std::size_t(strip) * win * C)};
+    // Samples stored as half are read as they are and converted here, row by
+    // row on the worker threads (OpenImageIO's conversion is serial and
+    // slower than decoding). Two strip buffers: the next strip is decoded
+    // while this one is acquired.
+    const std::size_t row_size = std::size_t(win) * C;
+    const bool half = std::all_of(readers.begin(), readers.end(),
+                                  [](const auto& r) { return r->stores_half(); });
+    std::vector<std::uint16_t> half_rows[2];
+    std::vector<float> float_rows[2];
+    for (int b = 0; b < 2; ++b) {
+      if (half) half_rows[b].resize(strip * row_size);
+      if (!half || hex) float_rows[b].resize(strip * row_size);
+    }
+    // Per strip row: its local-range reduction and its non-finite samples.
+    const std::size_t entries = std::size_t(local->row_entries());
+    std::vector<float> lo(strip * entries), hi(strip * entries);
+    std::vector<long> bad(strip), bad_first(strip);
     long nonfinite = 0, first_x = -1, first_y = -1;
     int first_c = -1;
     std::string first_file;
@@ -300,7 +350,11 @@ int run(const Options& o) {
       Progress progress(!o.quiet, "reading and acquiring");
       const auto t = Clock::now();
       auto read = [&](std::size_t i, int b) {
-        chunks[i].reader->read_rows(chunks[i].y0, chunks[i].y1, rows[b].data());
+        const Chunk& ch = chunks[i];
+        if (half)
+          ch.reader->read_rows_half(ch.y0, ch.y1, half_rows[b].data());
+        else
+          ch.reader->read_rows(ch.y0, ch.y1, float_rows[b].data());
       };
       std::future<void> next = std::async(std::launch::async, read, std::size_t(0), 0);
       for (std::size_t i = 0, b = 0; i < chunks.size(); ++i, b ^= 1) {
@@ -308,34 +362,55 @@ int run(const Options& o) {
         const long y = ch.global, y1 = ch.global + ch.y1 - ch.y0;
         next.get();  // rethrows a read error
         if (i + 1 < chunks.size()) next = std::async(std::launch::async, read, i + 1, int(b ^ 1));
-        float* data = rows[b].data();
-        const std::size_t n = std::size_t(y1 - y) * win * C;
-        bool all_finite = true;  // a branch-free scan first: the common case
-        for (std::size_t q = 0; q < n; ++q) all_finite &= std::abs(data[q]) <= FLT_MAX;
-        for (std::size_t q = 0; q < n && !all_finite; ++q)
-          if (!std::isfinite(data[q])) {
-            if (nonfinite++ == 0) {
-              first_c = int(q % C);
-              first_x = long((q / C) % win);
-              first_y = ch.y0 + long(q / (std::size_t(win) * C));
-              first_file = ch.reader->path();
+        // Row r of the strip as float, into `row`: non-finite samples zeroed
+        // (and counted), its local range taken, highlights compressed.
+        auto prepare = [&](long r, float* row) {
+          if (half) half_to_float(half_rows[b].data() + r * row_size, row, row_size);
+          bad[r] = 0;
+          const bool finite = all_finite(row, row_size);
+          for (std::size_t q = 0; q < row_size && !finite; ++q)
+            if (!std::isfinite(row[q])) {
+              if (bad[r]++ == 0) bad_first[r] = long(q);
+              row[q] = 0.0f;
             }
-            data[q] = 0.0f;
+          local->reduce_row(row, lo.data() + r * entries, hi.data() + r * entries);
+          if (compressed) for_colour(row, row_size, highlight_compress);
+        };
+        const long rows = y1 - y;
+        if (hex) {
+          float* data = float_rows[b].data();
+          parallel_for(rows, threads, [&](long r0, long r1) {
+            for (long r = r0; r < r1; ++r) prepare(r, data + r * row_size);
+          });
+          hexagonal->add_rows(y, y1, data);
+        } else {
+          cartesian->add_rows(y, y1, [&](long gy, float* scratch) {
+            float* row = half ? scratch : float_rows[b].data() + (gy - y) * row_size;
+            prepare(gy - y, row);
+            return row;
+          });
+        }
+        parallel_for(long(entries), threads, [&](long k0, long k1) {
+          local->add_reduced(y, y1, lo.data(), hi.data(), k0, k1);
+        });
+        for (long r = 0; r < rows; ++r) {
+          if (bad[r] && nonfinite == 0) {
+            first_c = int(bad_first[r] % C);
+            first_x = bad_first[r] / C;
+            first_y = ch.y0 + r;
+            first_file = ch.reader->path();
           }
+          nonfinite += bad[r];
+        }
         if (nonfinite && o.nonfinite == "error") {
           if (next.valid()) next.wait();
           break;
         }
-        local->add_rows(y, y1, data);
-        if (compressed) for_colour(data, n, highlight_compress);
-        if (hex)
-          hexagonal->add_rows(y, y1, data);
-        else
-          cartesian->add_rows(y, y1, data);
         progress.update(double(y1) / hin);
       }
       t_acquire = seconds_since(t);
     }
+    readers.clear();  // frees the decoders' buffers before the later stages
     if (nonfinite) {
       std::ostringstream m;
       m << first_file << ": non-finite sample (NaN or Inf) at x " << first_x << ", y " << first_y
@@ -364,14 +439,15 @@ int run(const Options& o) {
   apply_clamp(image, clamp, local.get());
   const RangeReport after = report_range(image, nullptr);
   const double t_resample = seconds_since(t);
+  const bool from_samples = local != nullptr;
+  local.reset();  // what is no longer needed goes before the output is written
 
   const Metadata md = {
       {"sis:method", k.min_error ? "min-error" : "conventional"},
       {"sis:generator", generator_name(k)},
       {"sis:display", shown.name()},
       {"sis:boundary", boundary_name(k.boundary)},
-      {"sis:input", fs::path(reader.path()).filename().string() +
-                        (readers.size() > 1 ? " and " + std::to_string(readers.size() - 1) + " more bands" : "")},
+      {"sis:input", input_label},
       {"sis:highlight_compress", compressed ? "1" : "0"},
       {"sis:clamp", clamp_name(clamp)},
       {"sis:output_min", std::to_string(after.min)},
@@ -387,7 +463,8 @@ int run(const Options& o) {
     write_coefficients(o.coeffs, k, names,
                        {{"sis:input", md[4].second},
                         {"sis:highlight_compress", compressed ? "1" : "0"}});
-  write_image(o.output, image, names, md, reader.alpha_channel());
+  std::vector<double>().swap(k.c.data);
+  write_image(o.output, image, names, md, alpha, out_format);
   const double t_write = seconds_since(t);
   if (o.verbose) {
     std::fprintf(stderr,
@@ -403,7 +480,7 @@ int run(const Options& o) {
                    "%ld x %ld offset-row coefficients over the frame and its margin%s\n",
                    1.0 / std::abs(k.lattice.determinant()), k.lattice.matrix()[0], k.c.width,
                    k.c.height,
-                   local ? (", " + hex_quadrature_name(quadrature) + " quadrature").c_str() : "");
+                   from_samples ? (", " + hex_quadrature_name(quadrature) + " quadrature").c_str() : "");
     std::fprintf(stderr, "siproject: output range [%g, %g], %ld negative samples", before.min,
                  before.max, before.negative);
     if (own_range)
@@ -427,17 +504,17 @@ int main(int argc, char** argv) {
       "IN is any image OpenImageIO reads (EXR above all), taken as point samples at\n"
       "((i + 1/2) / S, (j + 1/2) / S) output pixels; every channel is processed as it\n"
       "is (EXR alpha is premultiplied, so it is filtered with the colour). EXR output\n"
-      "is float with the method in its metadata; PNG, JPEG and TIFF are written 8-bit,\n"
-      "sRGB-encoded and clamped to [0, 1]. If IN is a coefficient file (--coeffs), the\n"
-      "stored approximation is evaluated instead: at its own size, --size or --factor,\n"
-      "with any --display.\n"
+      "keeps the input's sample type (half or float; -d), with the method in its\n"
+      "metadata; PNG, JPEG and TIFF are written 8-bit, sRGB-encoded and clamped to\n"
+      "[0, 1]. If IN is a coefficient file (--coeffs), the stored approximation is\n"
+      "evaluated instead: at its own size, --size or --factor, with any --display.\n"
       "Exit status: 0 success, 2 usage, 3 input, 4 output.",
       "siproject"};
   app.add_option("IN", o.inputs,
                  "input image, or a coefficient file written by --coeffs; several inputs are row "
                  "bands of one image (by their data windows, e.g. partial renders cropped with "
                  "oiiotool --crop), projected as one")->required();
-  app.add_option("-o,--output", o.output, "output image (.exr float; .png/.jpg/.tif 8-bit sRGB)")->required();
+  app.add_option("-o,--output", o.output, "output image (.exr half or float, see -d; .png/.jpg/.tif 8-bit sRGB)")->required();
   app.add_option("--factor", o.factor, "supersampling factor per axis: output = input / S (any real S > 0)")
       ->check(CLI::PositiveNumber);
   app.add_option("--size", o.size, "output size WxH (any ratio to the input)");
@@ -468,6 +545,9 @@ int main(int argc, char** argv) {
   auto* b = app.add_option("--boundary", o.boundary,
                            "mirror (half-sample symmetric) or periodic")->capture_default_str();
   app.add_option("--coeffs", o.coeffs, "also write the coefficients as a float EXR with their metadata");
+  app.add_option("-d,--data-format", o.data_format,
+                 "sample type of an EXR (or other float) output: half or float [default: the "
+                 "input's, as oiiotool does: half when the input stores half]");
   app.add_option("--nonfinite", o.nonfinite,
                  "NaN/Inf samples: error, or zero to replace them with 0")->capture_default_str();
   app.add_flag("--highlight-compress", o.highlight_compress,

@@ -1,6 +1,8 @@
 #include "sis/imageio.h"
 
+#include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
+#include <immintrin.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -75,8 +77,23 @@ long ImageReader::preferred_strip() const {
   return std::clamp(16 * ((4L << 20) / std::max(1L, row_bytes) / 16), 16L, 32L);
 }
 
-void ImageReader::read_rows(long y0, long y1, float* rows) {
+bool ImageReader::stores_half() const {
   const ImageSpec& s = impl_->spec;
+  if (s.channelformats.empty()) return s.format == TypeDesc::HALF;
+  return std::all_of(s.channelformats.begin(), s.channelformats.end(),
+                     [](TypeDesc t) { return t == TypeDesc::HALF; });
+}
+
+void ImageReader::read_rows(long y0, long y1, float* rows) { read(y0, y1, SampleFormat::Float, rows); }
+
+void ImageReader::read_rows_half(long y0, long y1, std::uint16_t* rows) {
+  if (!stores_half()) throw std::logic_error(path_ + ": read_rows_half() on samples not stored as half");
+  read(y0, y1, SampleFormat::Half, rows);
+}
+
+void ImageReader::read(long y0, long y1, SampleFormat format, void* rows) {
+  const ImageSpec& s = impl_->spec;
+  const TypeDesc type = format == SampleFormat::Half ? TypeDesc::HALF : TypeDesc::FLOAT;
   if (y0 < 0 || y1 > s.height || y1 < y0) {
     std::ostringstream m;
     m << path_ << ": rows [" << y0 << ", " << y1 << ") outside the image";
@@ -86,10 +103,9 @@ void ImageReader::read_rows(long y0, long y1, float* rows) {
   bool ok;
   if (s.tile_width > 0)
     ok = impl_->in->read_tiles(0, 0, s.x, s.x + s.width, s.y + y0, s.y + y1, s.z, s.z + 1, 0,
-                               s.nchannels, TypeDesc::FLOAT, rows);
+                               s.nchannels, type, rows);
   else
-    ok = impl_->in->read_scanlines(0, 0, s.y + y0, s.y + y1, s.z, 0, s.nchannels, TypeDesc::FLOAT,
-                                   rows);
+    ok = impl_->in->read_scanlines(0, 0, s.y + y0, s.y + y1, s.z, 0, s.nchannels, type, rows);
   if (!ok) {
     std::string why = impl_->in->geterror();
     if (why.empty()) why = "read failed";
@@ -98,6 +114,30 @@ void ImageReader::read_rows(long y0, long y1, float* rows) {
       << why;
     throw InputError(m.str());
   }
+}
+
+SampleFormat parse_sample_format(const std::string& spelling) {
+  if (spelling == "half") return SampleFormat::Half;
+  if (spelling == "float") return SampleFormat::Float;
+  throw std::invalid_argument("sample format '" + spelling + "': expected half or float");
+}
+
+std::string sample_format_name(SampleFormat f) { return f == SampleFormat::Half ? "half" : "float"; }
+
+namespace {
+__attribute__((target("avx,f16c"))) void half_to_float_f16c(const std::uint16_t* in, float* out,
+                                                           std::size_t n) {
+  std::size_t q = 0;
+  for (; q + 8 <= n; q += 8)
+    _mm256_storeu_ps(out + q, _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(in + q))));
+  for (; q < n; ++q) out[q] = _cvtsh_ss(in[q]);
+}
+}  // namespace
+
+void half_to_float(const std::uint16_t* in, float* out, std::size_t n) {
+  static const bool f16c = __builtin_cpu_supports("f16c") && __builtin_cpu_supports("avx");
+  if (f16c) return half_to_float_f16c(in, out, n);
+  for (std::size_t q = 0; q < n; ++q) out[q] = imath_half_to_float(in[q]);
 }
 
 Image read_image(const std::string& path) {
@@ -155,12 +195,14 @@ void write_atomically(const std::string& path, const ImageSpec& spec, TypeDesc d
 
 void write_image(const std::string& path, const Image& image,
                  const std::vector<std::string>& channel_names, const Metadata& metadata,
-                 int alpha_channel) {
+                 int alpha_channel, SampleFormat format) {
   if (image.width < 1 || image.height < 1 || image.channels < 1)
     throw OutputError(path + ": refusing to write an empty image");
   const bool eight = is_8bit_format(path);
   ImageSpec spec(int(image.width), int(image.height), image.channels,
-                 eight ? TypeDesc::UINT8 : TypeDesc::FLOAT);
+                 eight                                ? TypeDesc::UINT8
+                 : format == SampleFormat::Half ? TypeDesc::HALF
+                                                      : TypeDesc::FLOAT);
   if (int(channel_names.size()) == image.channels) spec.channelnames = channel_names;
   if (alpha_channel >= 0 && alpha_channel < image.channels) spec.alpha_channel = alpha_channel;
   for (const auto& [k, v] : metadata) spec.attribute(k, v);

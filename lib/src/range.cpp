@@ -5,6 +5,10 @@
 #include <limits>
 #include <stdexcept>
 
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 #include "sis/prefilter.h"
 #include "sis/resample.h"
 
@@ -79,7 +83,7 @@ void row_range_fixed(const float* row, const long* xb, const long* xe, long widt
                      float* hi) {
   for (long n = 0; n < width; ++n) {
     float l[C], h[C];
-    for (int c = 0; c < C; ++c) l[c] = lo[n * C + c], h[c] = hi[n * C + c];
+    for (int c = 0; c < C; ++c) l[c] = INFINITY, h[c] = -INFINITY;
     for (long i = xb[n]; i < xe[n]; ++i)
       for (int c = 0; c < C; ++c) {
         const float v = row[std::size_t(i) * C + c];
@@ -91,28 +95,76 @@ void row_range_fixed(const float* row, const long* xb, const long* xe, long widt
 }
 }  // namespace
 
-void LocalRange::add_rows(long y0, long y1, const float* rows) {
+#if defined(__SSE2__)
+// Three or four channels at once. With three, the fourth lane reads the next
+// sample's first channel (ignored), except at the row's last sample.
+template <int C>
+void row_range_sse(const float* row, const long* xb, const long* xe, long width, long samples,
+                   float* lo, float* hi) {
+  static_assert(C == 3 || C == 4);
+  for (long n = 0; n < width; ++n) {
+    __m128 l = _mm_set1_ps(INFINITY), h = _mm_set1_ps(-INFINITY);
+    for (long i = xb[n]; i < xe[n]; ++i) {
+      const float* s = row + std::size_t(i) * C;
+      const __m128 v = (C == 4 || i + 1 < samples) ? _mm_loadu_ps(s) : _mm_setr_ps(s[0], s[1], s[2], 0.0f);
+      l = _mm_min_ps(v, l);  // v < l ? v : l, as row_range_fixed
+      h = _mm_max_ps(v, h);
+    }
+    alignas(16) float a[4], b[4];
+    _mm_store_ps(a, l);
+    _mm_store_ps(b, h);
+    for (int c = 0; c < C; ++c) lo[n * C + c] = a[c], hi[n * C + c] = b[c];
+  }
+}
+#endif
+
+void LocalRange::reduce_row(const float* row, float* lo, float* hi) const {
   const int C = channels_;
+#if defined(__SSE2__)
+  if (C == 3) return row_range_sse<3>(row, x_begin_.data(), x_end_.data(), min_.width, win_, lo, hi);
+  if (C == 4) return row_range_sse<4>(row, x_begin_.data(), x_end_.data(), min_.width, win_, lo, hi);
+#endif
+  switch (C) {
+    case 1: return row_range_fixed<1>(row, x_begin_.data(), x_end_.data(), min_.width, lo, hi);
+    case 3: return row_range_fixed<3>(row, x_begin_.data(), x_end_.data(), min_.width, lo, hi);
+    case 4: return row_range_fixed<4>(row, x_begin_.data(), x_end_.data(), min_.width, lo, hi);
+    default:
+      for (long n = 0; n < min_.width; ++n)
+        for (int c = 0; c < C; ++c) {
+          float l = INFINITY, h = -INFINITY;
+          for (long i = x_begin_[n]; i < x_end_[n]; ++i) {
+            const float v = row[std::size_t(i) * C + c];
+            l = std::min(l, v);
+            h = std::max(h, v);
+          }
+          lo[n * C + c] = l;
+          hi[n * C + c] = h;
+        }
+  }
+}
+
+void LocalRange::add_reduced(long y0, long y1, const float* lo, const float* hi, long k0, long k1) {
+  const std::size_t entries = std::size_t(row_entries());
   for (long m = 0; m < min_.height; ++m) {
     const long a = std::max(y0, y_begin_[m]), b = std::min(y1, y_end_[m]);
+    float* mn = min_.row(m);
+    float* mx = max_.row(m);
     for (long j = a; j < b; ++j) {
-      const float* row = rows + std::size_t(j - y0) * win_ * C;
-      float* lo = min_.row(m);
-      float* hi = max_.row(m);
-      switch (C) {
-        case 1: row_range_fixed<1>(row, x_begin_.data(), x_end_.data(), min_.width, lo, hi); break;
-        case 3: row_range_fixed<3>(row, x_begin_.data(), x_end_.data(), min_.width, lo, hi); break;
-        case 4: row_range_fixed<4>(row, x_begin_.data(), x_end_.data(), min_.width, lo, hi); break;
-        default:
-          for (long n = 0; n < min_.width; ++n)
-            for (long i = x_begin_[n]; i < x_end_[n]; ++i)
-              for (int c = 0; c < C; ++c) {
-                const float v = row[std::size_t(i) * C + c];
-                lo[n * C + c] = std::min(lo[n * C + c], v);
-                hi[n * C + c] = std::max(hi[n * C + c], v);
-              }
+      const float* l = lo + std::size_t(j - y0) * entries;
+      const float* h = hi + std::size_t(j - y0) * entries;
+      for (long k = k0; k < k1; ++k) {
+        mn[k] = l[k] < mn[k] ? l[k] : mn[k];
+        mx[k] = h[k] > mx[k] ? h[k] : mx[k];
       }
     }
+  }
+}
+
+void LocalRange::add_rows(long y0, long y1, const float* rows) {
+  std::vector<float> lo(row_entries()), hi(row_entries());
+  for (long j = y0; j < y1; ++j) {
+    reduce_row(rows + std::size_t(j - y0) * win_ * channels_, lo.data(), hi.data());
+    add_reduced(j, j + 1, lo.data(), hi.data(), 0, row_entries());
   }
 }
 

@@ -10,6 +10,7 @@
 // plain sum, r[n] = dx dy sum_i f_i phi(x_i - x_n), over every sample of the
 // boundary-extended image in the support. Rows stream through: each row is
 // read once and added to every coefficient whose support holds it.
+#include <functional>
 #include <vector>
 
 #include "sis/image.h"
@@ -58,6 +59,12 @@ class Acquisition {
   // Rows [y0, y1) of the input, interleaved, W_in * channels per row.
   void add_rows(long y0, long y1, const float* rows);
   void add_rows(long y0, long y1, const double* rows);
+  // Rows [y0, y1) from a function: row(y, scratch) returns input row y
+  // (W_in * channels floats), written into scratch (room for one row) or
+  // held elsewhere. Called once per row, on the worker threads, so that
+  // per-row work (decoding, checks) runs in parallel with the filtering.
+  using RowSource = std::function<const float*(long y, float* scratch)>;
+  void add_rows(long y0, long y1, const RowSource& row);
   long next_row() const { return next_row_; }
   // The acquired coefficients r[n] (min-error) or pixels p[n] (conventional).
   Coefficients finish();
@@ -69,8 +76,8 @@ class Acquisition {
   Grid<double> acc_;
   std::vector<long> cursor_;     // per coefficient row: next entry of weights_y
   std::vector<double> strip_;    // horizontally filtered rows of the current strip
-  template <typename T>
-  void add(long y0, long y1, const T* rows);
+  template <typename T, typename Row>
+  void add(long y0, long y1, const Row& row, bool scratch_row);
 };
 
 // Convenience: acquires a whole in-memory image.

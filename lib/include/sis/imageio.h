@@ -2,6 +2,8 @@
 // Image I/O through OpenImageIO: strip reading for streaming acquisition,
 // atomic writing (temporary name in the same folder, then rename), and
 // coefficient files (float EXR whose metadata records the approximation).
+#include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -22,6 +24,15 @@ struct OutputError : std::runtime_error {
 };
 
 using Metadata = std::vector<std::pair<std::string, std::string>>;
+
+// Sample types of float image files (EXR, float TIFF...).
+enum class SampleFormat { Half, Float };
+SampleFormat parse_sample_format(const std::string& spelling);  // half | float
+std::string sample_format_name(SampleFormat f);
+
+// IEEE half-precision bits to float, exactly (every half is a float); with
+// the processor's F16C conversion where it has one.
+void half_to_float(const std::uint16_t* in, float* out, std::size_t n);
 
 // Reads an image in row strips as float, whatever its stored type.
 class ImageReader {
@@ -52,24 +63,31 @@ class ImageReader {
   // Reads rows [y0, y1) (0-based within the data window) into `rows`,
   // interleaved floats. Throws InputError on a truncated or corrupt file.
   void read_rows(long y0, long y1, float* rows);
+  // True when every channel is stored as half: then rows can be read as
+  // they are stored, without OpenImageIO's conversion (read_rows_half).
+  bool stores_half() const;
+  // As read_rows, into the half bits of the samples (needs stores_half()).
+  void read_rows_half(long y0, long y1, std::uint16_t* rows);
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::string path_;
+  void read(long y0, long y1, SampleFormat type, void* rows);
 };
 
 // Reads a whole image as float.
 Image read_image(const std::string& path);
 
-// Writes an image. EXR (and other float formats) as float with the metadata
-// as string attributes; 8-bit formats (PNG, JPEG, 8-bit TIFF...) sRGB-encoded
+// Writes an image. EXR (and other float formats) as float, or half when
+// `format` says so, with the metadata as string attributes; 8-bit formats (PNG, JPEG, 8-bit TIFF...) sRGB-encoded
 // and clamped to [0, 1], alpha (premultiplied) divided out first.
 // Written to a temporary name in the same folder, then renamed: never a
 // partial file. Throws OutputError naming the file.
 void write_image(const std::string& path, const Image& image,
                  const std::vector<std::string>& channel_names = {},
-                 const Metadata& metadata = {}, int alpha_channel = -1);
+                 const Metadata& metadata = {}, int alpha_channel = -1,
+                 SampleFormat format = SampleFormat::Float);
 
 // True for the formats written 8-bit sRGB by write_image.
 bool is_8bit_format(const std::string& path);

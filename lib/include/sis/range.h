@@ -29,6 +29,14 @@ class LocalRange {
  public:
   LocalRange(long input_width, long input_height, int channels, long width, long height);
   void add_rows(long y0, long y1, const float* rows);
+  // add_rows in two steps, for callers that handle rows in parallel: the
+  // min/max of one input row over each output pixel's columns into lo and hi
+  // (width * channels entries each), ...
+  void reduce_row(const float* row, float* lo, float* hi) const;
+  // ... then reduced rows [y0, y1) folded into the output pixels' ranges,
+  // entries [k0, k1) of each output row only (a split by columns).
+  void add_reduced(long y0, long y1, const float* lo, const float* hi, long k0, long k1);
+  long row_entries() const { return min_.width * channels_; }
   const Image& min() const { return min_; }
   const Image& max() const { return max_; }
 

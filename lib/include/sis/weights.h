@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "sis/boundary.h"
+#include "sis/parallel.h"
 
 namespace sis {
 
@@ -28,9 +29,5 @@ struct AxisWeights {
 AxisWeights make_axis_weights(long targets, long sources, Boundary boundary,
                               const std::function<std::pair<long, long>(long)>& range,
                               const std::function<double(long, long)>& weight);
-
-// Runs fn(begin, end) over [0, n) split into contiguous chunks on up to
-// `threads` threads. Each index is handled by exactly one call.
-void parallel_for(long n, int threads, const std::function<void(long, long)>& fn);
 
 }  // namespace sis
