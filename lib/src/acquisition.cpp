@@ -49,27 +49,31 @@ AxisWeights acquisition_axis(int axis, long coefficients, long samples, double e
   return w;
 }
 
-// out[n] = sum_e w[e] in[index[e]] per channel, for every target n. Channel
-// counts 1, 3 and 4 are unrolled; a target whose sources are contiguous (all
-// but a few at the borders) runs a loop without index look-ups. The sums run
-// in the same order on every path.
+// out[n] = sum_e w[e] in[index[e]] per channel, for every target n. The sum
+// over a target's taps k is four interleaved partial sums, p_j over k = j
+// mod 4 in increasing k, combined as (p0 + p1) + (p2 + p3): the four chains
+// run in parallel in the processor, and every path below (scalar, vector,
+// float or double rows) keeps this order, so they give the same bits.
+// Channel counts 1, 3 and 4 are unrolled; a target whose sources are
+// contiguous (all but a few at the borders) runs without index look-ups.
 template <int C, typename T>
 void filter_row_fixed(const AxisWeights& w, const T* in, long targets, double* out) {
   for (long n = 0; n < targets; ++n) {
-    double acc[C] = {};
+    double acc[4][C] = {};
     const long b = w.begin(n), e = w.end(n);
     const double* wt = w.weight.data() + b;
     if (e > b && w.index[e - 1] - w.index[b] == e - 1 - b) {
       const T* s = in + std::size_t(w.index[b]) * C;
       for (long k = 0; k < e - b; ++k)
-        for (int c = 0; c < C; ++c) acc[c] += wt[k] * s[k * C + c];
+        for (int c = 0; c < C; ++c) acc[k & 3][c] += wt[k] * s[k * C + c];
     } else {
       for (long k = 0; k < e - b; ++k) {
         const T* s = in + std::size_t(w.index[b + k]) * C;
-        for (int c = 0; c < C; ++c) acc[c] += wt[k] * s[c];
+        for (int c = 0; c < C; ++c) acc[k & 3][c] += wt[k] * s[c];
       }
     }
-    for (int c = 0; c < C; ++c) out[std::size_t(n) * C + c] = acc[c];
+    for (int c = 0; c < C; ++c)
+      out[std::size_t(n) * C + c] = (acc[0][c] + acc[1][c]) + (acc[2][c] + acc[3][c]);
   }
 }
 
@@ -79,32 +83,41 @@ void filter_row_fixed(const AxisWeights& w, const T* in, long targets, double* o
 // lane reads the next sample's first channel and is ignored; the row's last
 // sample is loaded alone). Each lane adds the same products in the same
 // order as the scalar loop (no fused multiply-add), so the sums are the same
-// bits on every path.
+// bits.
+__attribute__((target("avx"))) inline __m256d tap(__m256d acc, double weight, __m128 v) {
+  return _mm256_add_pd(acc, _mm256_mul_pd(_mm256_set1_pd(weight), _mm256_cvtps_pd(v)));
+}
+
 template <int C>
 __attribute__((target("avx"))) void filter_row_avx(const AxisWeights& w, const float* in,
                                                    long targets, double* out) {
   static_assert(C == 3 || C == 4);
   const long last = w.sources - 1;
-  auto load = [&](long i) {
-    const float* s = in + std::size_t(i) * C;
-    return (C == 4 || i < last) ? _mm_loadu_ps(s) : _mm_setr_ps(s[0], s[1], s[2], 0.0f);
-  };
   for (long n = 0; n < targets; ++n) {
-    __m256d acc = _mm256_setzero_pd();
-    const long b = w.begin(n), e = w.end(n);
+    __m256d acc[4] = {_mm256_setzero_pd(), _mm256_setzero_pd(), _mm256_setzero_pd(),
+                      _mm256_setzero_pd()};
+    const long b = w.begin(n), K = w.end(n) - b;
     const double* wt = w.weight.data() + b;
     const long* idx = w.index.data() + b;
-    if (e > b && idx[e - 1 - b] - idx[0] == e - 1 - b && (C == 4 || idx[e - 1 - b] < last)) {
+    if (K > 0 && idx[K - 1] - idx[0] == K - 1 && (C == 4 || idx[K - 1] < last)) {
       const float* s = in + std::size_t(idx[0]) * C;
-      for (long k = 0; k < e - b; ++k)
-        acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_set1_pd(wt[k]),
-                                               _mm256_cvtps_pd(_mm_loadu_ps(s + k * C))));
+      long k = 0;
+      for (; k + 4 <= K; k += 4) {
+        acc[0] = tap(acc[0], wt[k], _mm_loadu_ps(s + k * C));
+        acc[1] = tap(acc[1], wt[k + 1], _mm_loadu_ps(s + (k + 1) * C));
+        acc[2] = tap(acc[2], wt[k + 2], _mm_loadu_ps(s + (k + 2) * C));
+        acc[3] = tap(acc[3], wt[k + 3], _mm_loadu_ps(s + (k + 3) * C));
+      }
+      for (; k < K; ++k) acc[k & 3] = tap(acc[k & 3], wt[k], _mm_loadu_ps(s + k * C));
     } else {
-      for (long k = 0; k < e - b; ++k)
-        acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_set1_pd(wt[k]), _mm256_cvtps_pd(load(idx[k]))));
+      for (long k = 0; k < K; ++k) {
+        const float* s = in + std::size_t(idx[k]) * C;
+        const __m128 v = (C == 4 || idx[k] < last) ? _mm_loadu_ps(s) : _mm_setr_ps(s[0], s[1], s[2], 0.0f);
+        acc[k & 3] = tap(acc[k & 3], wt[k], v);
+      }
     }
     alignas(32) double a[4];
-    _mm256_store_pd(a, acc);
+    _mm256_store_pd(a, _mm256_add_pd(_mm256_add_pd(acc[0], acc[1]), _mm256_add_pd(acc[2], acc[3])));
     for (int c = 0; c < C; ++c) out[std::size_t(n) * C + c] = a[c];
   }
 }
@@ -129,12 +142,14 @@ void filter_row(const AxisWeights& w, const T* in, int C, long targets, double* 
     case 4: return filter_row_fixed<4>(w, in, targets, out);
     default:
       for (long n = 0; n < targets; ++n) {
-        double* o = out + std::size_t(n) * C;
-        for (int c = 0; c < C; ++c) o[c] = 0.0;
+        std::vector<double> acc(4 * std::size_t(C), 0.0);
         for (long e = w.begin(n); e < w.end(n); ++e) {
           const T* s = in + std::size_t(w.index[e]) * C;
-          for (int c = 0; c < C; ++c) o[c] += w.weight[e] * s[c];
+          double* a = acc.data() + ((e - w.begin(n)) & 3) * C;
+          for (int c = 0; c < C; ++c) a[c] += w.weight[e] * s[c];
         }
+        for (int c = 0; c < C; ++c)
+          out[std::size_t(n) * C + c] = (acc[c] + acc[C + c]) + (acc[2 * C + c] + acc[3 * C + c]);
       }
   }
 }

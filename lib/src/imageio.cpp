@@ -71,10 +71,10 @@ std::string ImageReader::attribute(const std::string& name) const {
 long ImageReader::preferred_strip() const {
   const long th = impl_->spec.tile_height;
   if (th > 0) return th * std::max(1L, 32 / th);
-  // Whole 16-row zip blocks, about 4 MB of float rows: 32 rows up to 10000
-  // RGB columns, 16 beyond (memory stays flat for very wide inputs).
-  const long row_bytes = long(impl_->spec.width) * impl_->spec.nchannels * long(sizeof(float));
-  return std::clamp(16 * ((4L << 20) / std::max(1L, row_bytes) / 16), 16L, 32L);
+  // Whole 16-row zip blocks, about 4 MB of half rows: 64 rows up to 10000
+  // RGB columns, fewer beyond (memory stays flat for very wide inputs).
+  const long row_bytes = long(impl_->spec.width) * impl_->spec.nchannels * 2;
+  return std::clamp(16 * ((4L << 20) / std::max(1L, row_bytes) / 16), 16L, 64L);
 }
 
 bool ImageReader::stores_half() const {
@@ -100,12 +100,22 @@ void ImageReader::read(long y0, long y1, SampleFormat format, void* rows) {
     throw InputError(m.str());
   }
   if (y1 == y0) return;
+  const bool stored_as_asked =
+      s.channelformats.empty()
+          ? s.format == type
+          : std::all_of(s.channelformats.begin(), s.channelformats.end(),
+                        [&](TypeDesc t) { return t == type; });
   bool ok;
   if (s.tile_width > 0)
     ok = impl_->in->read_tiles(0, 0, s.x, s.x + s.width, s.y + y0, s.y + y1, s.z, s.z + 1, 0,
                                s.nchannels, type, rows);
   else
-    ok = impl_->in->read_scanlines(0, 0, s.y + y0, s.y + y1, s.z, 0, s.nchannels, type, rows);
+    // Samples stored as asked are read as stored (TypeDesc::UNKNOWN), straight
+    // into `rows`: OpenImageIO 2.4 stages any call that names a type, even
+    // the stored one, through a fresh 64 MB buffer, whose page faults cost
+    // more than the decoding of the strip.
+    ok = impl_->in->read_scanlines(0, 0, s.y + y0, s.y + y1, s.z, 0, s.nchannels,
+                                   stored_as_asked ? TypeDesc::UNKNOWN : type, rows);
   if (!ok) {
     std::string why = impl_->in->geterror();
     if (why.empty()) why = "read failed";
