@@ -16,7 +16,10 @@ from /usr/bin/time -v), RUNS rounds, each round running every competitor once
 in turn, so that a change in the machine's load falls on all of them alike;
 the table reports the median wall time and the largest peak resident set:
 
-  decode floor   sidecode: reads the input in strips as siproject does
+  decode floor   sidecode: reads the input in strips as siproject does, in
+                 its stored sample type (half: no conversion)
+  decode to float  sidecode --as-float: the same through OpenImageIO's
+                 conversion to float (what a reader asking for float pays)
   oiiotool       --resize:filter=F WxH, F = box triangle mitchell bspline lanczos3
   splineops      least-squares spline resize, degrees 1 and 3
                  (scripts/splineops_resize.py)
@@ -74,6 +77,7 @@ SIPROJECT_METHODS = [
 ]
 HEADLINE = "siproject min-error cubic 2x2"
 DECODE = "decode floor (sidecode)"
+DECODE_FLOAT = "decode to float (sidecode --as-float)"
 STARTUP = "start-up floor (sidecode, 16 x 16 input)"
 OIIO_BSPLINE = "oiiotool bspline"
 
@@ -427,7 +431,9 @@ def md_text(rows, meta, threads, micro):
     L.append(f"- input: `{meta['input']}` ({meta['input_info']}), scene {meta['scene']}, "
              f"rendered by scripts/render.sh (POV-Ray, antialiasing off)")
     L.append(f"- output: {meta['out_size']}; every competitor is a whole process "
-             f"(read, resize, write a 1-part EXR), timed by wall clock; "
+             f"(read, resize, write a 1-part zip EXR of the input's sample type: half, as "
+             f"oiiotool keeps it), timed by wall clock; the decode floor reads the samples as "
+             f"stored, OpenImageIO's serial conversion to float is the row below it; "
              f"{meta['runs']} round(s), each running every competitor once in turn; "
              f"wall = median over the rounds (min-max beside it), CPU = median user+system "
              f"time (less sensitive to other load than wall); peak memory = largest "
@@ -576,7 +582,8 @@ def competitors_for(args, inp, work):
     out = lambda tag: os.path.join(work, tag + ".exr")
     # (group, name, command); the displayed command uses the project's paths.
     comps = [("floor", STARTUP, [args.sidecode, os.path.join(work, "tiny.exr")]),
-             ("floor", DECODE, [args.sidecode, inp])]
+             ("floor", DECODE, [args.sidecode, inp]),
+             ("floor", DECODE_FLOAT, [args.sidecode, inp, "--as-float"])]
     for f in OIIO_FILTERS:
         comps.append(("oiiotool", f"oiiotool {f}",
                       ["oiiotool", inp, f"--resize:filter={f}", size, "-o", out("oiio-" + f)]))

@@ -5,7 +5,8 @@
 
 Reads an OpenEXR image (every channel, half or float) with the OpenEXR Python
 bindings, resizes each channel with splineops' least-squares spline resize
-and writes a float EXR (ZIP), to a temporary name in OUT's folder renamed on
+and writes an EXR (ZIP) of the input's sample type (half stays half, as
+oiiotool and siproject do), to a temporary name in OUT's folder renamed on
 success: never a partial file.
 
 Least-squares resize (Munoz, Barrientos, Unser 2001): orthogonal projection
@@ -69,6 +70,7 @@ def main():
     try:
         infile = OpenEXR.File(args.input, separate_channels=True)
         channels = {name: ch.pixels for name, ch in infile.channels().items()}
+        stored = {name: plane.dtype for name, plane in channels.items()}
     except Exception as e:  # the bindings raise plain exceptions
         fail(3, f"cannot read {args.input!r}: {e}")
     del infile
@@ -82,7 +84,8 @@ def main():
 
     result = {}
     for name in sorted(channels):
-        result[name] = np.asarray(resize_channel(channels.pop(name)), dtype=np.float32)
+        out_type = np.float16 if stored[name] == np.float16 else np.float32
+        result[name] = np.asarray(resize_channel(channels.pop(name)), dtype=np.float32).astype(out_type)
 
     out_dir = os.path.dirname(os.path.abspath(args.output))
     if not os.path.isdir(out_dir):

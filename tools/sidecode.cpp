@@ -12,14 +12,18 @@
 
 int main(int argc, char** argv) {
   std::string input;
+  bool as_float = false;
   CLI::App app{"sidecode: read an image in strips as siproject does, and nothing else", "sidecode"};
   app.add_option("IN", input, "image to decode")->required();
+  app.add_flag("--as-float", as_float,
+               "read half samples as float through OpenImageIO's conversion (what a reader "
+               "asking for float pays), instead of as they are stored");
   CLI11_PARSE(app, argc, argv);
   try {
     sis::ImageReader reader(input);
     const long strip = reader.preferred_strip();
     const std::size_t n = std::size_t(strip) * reader.width() * reader.channels();
-    const bool half = reader.stores_half();
+    const bool half = reader.stores_half() && !as_float;
     std::vector<float> rows(half ? 0 : n);
     std::vector<std::uint16_t> half_rows(half ? n : 0);
     double checksum = 0;

@@ -104,10 +104,16 @@ void row_range_sse(const float* row, const long* xb, const long* xe, long width,
   static_assert(C == 3 || C == 4);
   for (long n = 0; n < width; ++n) {
     __m128 l = _mm_set1_ps(INFINITY), h = _mm_set1_ps(-INFINITY);
-    for (long i = xb[n]; i < xe[n]; ++i) {
-      const float* s = row + std::size_t(i) * C;
-      const __m128 v = (C == 4 || i + 1 < samples) ? _mm_loadu_ps(s) : _mm_setr_ps(s[0], s[1], s[2], 0.0f);
+    const long end = (C == 4 || xe[n] < samples) ? xe[n] : xe[n] - 1;  // loads of 4 stay in the row
+    for (long i = xb[n]; i < end; ++i) {
+      const __m128 v = _mm_loadu_ps(row + std::size_t(i) * C);
       l = _mm_min_ps(v, l);  // v < l ? v : l, as row_range_fixed
+      h = _mm_max_ps(v, h);
+    }
+    if (end < xe[n]) {
+      const float* s = row + std::size_t(end) * C;
+      const __m128 v = _mm_setr_ps(s[0], s[1], s[2], 0.0f);
+      l = _mm_min_ps(v, l);
       h = _mm_max_ps(v, h);
     }
     alignas(16) float a[4], b[4];
