@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -252,11 +251,10 @@ int run(const Options& o) {
 
   // Output samples as the input's (oiiotool's habit): half when every input
   // stores half, float otherwise.
+  const bool half = std::all_of(readers.begin(), readers.end(),
+                                [](const auto& r) { return r->stores_half(); });
   const SampleFormat out_format =
-      data_format ? *data_format
-                  : std::all_of(readers.begin(), readers.end(), [](const auto& r) { return r->stores_half(); })
-                        ? SampleFormat::Half
-                        : SampleFormat::Float;
+      data_format ? *data_format : half ? SampleFormat::Half : SampleFormat::Float;
   const std::string input_label =
       fs::path(reader.path()).filename().string() +
       (readers.size() > 1 ? " and " + std::to_string(readers.size() - 1) + " more bands" : "");
@@ -331,8 +329,6 @@ int run(const Options& o) {
     // slower than decoding). Two strip buffers: the next strip is decoded
     // while this one is acquired.
     const std::size_t row_size = std::size_t(win) * C;
-    const bool half = std::all_of(readers.begin(), readers.end(),
-                                  [](const auto& r) { return r->stores_half(); });
     std::vector<std::uint16_t> half_rows[2];
     std::vector<float> float_rows[2];
     for (int b = 0; b < 2; ++b) {
@@ -437,7 +433,7 @@ int run(const Options& o) {
   const bool own_range = local && local->min().width == W && local->min().height == H;
   const RangeReport before = report_range(image, own_range ? local.get() : nullptr);
   apply_clamp(image, clamp, local.get());
-  const RangeReport after = report_range(image, nullptr);
+  const RangeReport after = clamp == Clamp::None ? before : report_range(image, nullptr);
   const double t_resample = seconds_since(t);
   const bool from_samples = local != nullptr;
   local.reset();  // what is no longer needed goes before the output is written
