@@ -140,9 +140,10 @@ void filter_row(const AxisWeights& w, const T* in, int C, long targets, double* 
     case 1: return filter_row_fixed<1>(w, in, targets, out);
     case 3: return filter_row_fixed<3>(w, in, targets, out);
     case 4: return filter_row_fixed<4>(w, in, targets, out);
-    default:
+    default: {
+      std::vector<double> acc(4 * std::size_t(C));
       for (long n = 0; n < targets; ++n) {
-        std::vector<double> acc(4 * std::size_t(C), 0.0);
+        std::fill(acc.begin(), acc.end(), 0.0);
         for (long e = w.begin(n); e < w.end(n); ++e) {
           const T* s = in + std::size_t(w.index[e]) * C;
           double* a = acc.data() + ((e - w.begin(n)) & 3) * C;
@@ -151,6 +152,7 @@ void filter_row(const AxisWeights& w, const T* in, int C, long targets, double* 
         for (int c = 0; c < C; ++c)
           out[std::size_t(n) * C + c] = (acc[c] + acc[C + c]) + (acc[2 * C + c] + acc[3 * C + c]);
       }
+    }
   }
 }
 

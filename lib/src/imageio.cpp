@@ -2,7 +2,6 @@
 
 #include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
-#include <immintrin.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,6 +11,10 @@
 #include <sstream>
 
 #include "sis/hex_lattice.h"
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace sis {
 
@@ -134,6 +137,7 @@ SampleFormat parse_sample_format(const std::string& spelling) {
 
 std::string sample_format_name(SampleFormat f) { return f == SampleFormat::Half ? "half" : "float"; }
 
+#if defined(__x86_64__)
 namespace {
 __attribute__((target("avx,f16c"))) void half_to_float_f16c(const std::uint16_t* in, float* out,
                                                            std::size_t n) {
@@ -143,10 +147,13 @@ __attribute__((target("avx,f16c"))) void half_to_float_f16c(const std::uint16_t*
   for (; q < n; ++q) out[q] = _cvtsh_ss(in[q]);
 }
 }  // namespace
+#endif
 
 void half_to_float(const std::uint16_t* in, float* out, std::size_t n) {
+#if defined(__x86_64__)
   static const bool f16c = __builtin_cpu_supports("f16c") && __builtin_cpu_supports("avx");
   if (f16c) return half_to_float_f16c(in, out, n);
+#endif
   for (std::size_t q = 0; q < n; ++q) out[q] = imath_half_to_float(in[q]);
 }
 
@@ -209,10 +216,10 @@ void write_image(const std::string& path, const Image& image,
   if (image.width < 1 || image.height < 1 || image.channels < 1)
     throw OutputError(path + ": refusing to write an empty image");
   const bool eight = is_8bit_format(path);
-  ImageSpec spec(int(image.width), int(image.height), image.channels,
-                 eight                                ? TypeDesc::UINT8
-                 : format == SampleFormat::Half ? TypeDesc::HALF
-                                                      : TypeDesc::FLOAT);
+  const TypeDesc stored = eight                          ? TypeDesc::UINT8
+                          : format == SampleFormat::Half ? TypeDesc::HALF
+                                                         : TypeDesc::FLOAT;
+  ImageSpec spec(int(image.width), int(image.height), image.channels, stored);
   if (int(channel_names.size()) == image.channels) spec.channelnames = channel_names;
   if (alpha_channel >= 0 && alpha_channel < image.channels) spec.alpha_channel = alpha_channel;
   for (const auto& [k, v] : metadata) spec.attribute(k, v);
