@@ -2,6 +2,7 @@
 // identities of the orthogonal projection (DESIGN.md sections 2 to 5).
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -123,6 +124,22 @@ TEST(Acquisition, EveryPathGivesTheSameBits) {
         }
         EXPECT_EQ(a.finish().c.data, ref.c.data) << C << " " << k.name();
       }
+}
+
+TEST(Parallel, EveryIndexOnceAlsoWhenNested) {
+  // Chunks of a parallel_for that call parallel_for themselves (run in the
+  // calling thread): every index of every level exactly once.
+  const long n = 37, m = 53;
+  std::vector<std::atomic<int>> seen(n * m);
+  parallel_for(n, 3, [&](long i0, long i1) {
+    for (long i = i0; i < i1; ++i)
+      parallel_for(m, 2, [&](long j0, long j1) {
+        for (long j = j0; j < j1; ++j) ++seen[i * m + j];
+      });
+  });
+  for (const auto& s : seen) EXPECT_EQ(s.load(), 1);
+  EXPECT_THROW(parallel_for(4, 2, [](long, long) { throw std::runtime_error("part"); }),
+               std::runtime_error);
 }
 
 TEST(Acquisition, RowsMustArriveInOrder) {

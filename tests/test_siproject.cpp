@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -119,6 +120,16 @@ TEST_F(Siproject, CoefficientRoundTripEqualsDirectResult) {
     EXPECT_EQ(a.width, b.width);
     EXPECT_EQ(a.data, b.data) << extra;
   }
+  // A half input: the direct output is half, and so is the evaluation of its
+  // coefficient file (which records the input's sample type), bit for bit.
+  write_half(path("inh.exr"), random_image(90, 60, 3, 3));
+  ASSERT_EQ(run(path("inh.exr") + " -o " + path("directh.exr") + " --factor 3 -q --coeffs " +
+                path("ch.exr")).status, 0);
+  ASSERT_EQ(run(path("ch.exr") + " -o " + path("rth.exr") + " -q").status, 0);
+  EXPECT_EQ(ImageReader(path("ch.exr")).attribute("sis:input_format"), "half");
+  EXPECT_TRUE(ImageReader(path("directh.exr")).stores_half());
+  EXPECT_TRUE(ImageReader(path("rth.exr")).stores_half());
+  EXPECT_EQ(read_image(path("directh.exr")).data, read_image(path("rth.exr")).data);
   // At another size: the stored approximation sampled there.
   ProjectionOptions o;
   Coefficients k = project(read_image(path("in.exr")), 30, 20, o);
@@ -170,6 +181,34 @@ TEST_F(Siproject, EveryChannelCountAndHalfInput) {
   EXPECT_FALSE(ImageReader(path("o1.exr")).stores_half());
   ASSERT_EQ(run(path("inf.exr") + " -o " + path("o2.exr") + " --factor 2 -q -d half").status, 0);
   EXPECT_TRUE(ImageReader(path("o2.exr")).stores_half());
+}
+
+TEST_F(Siproject, HalfOutputNeverHoldsInfinities) {
+  // A step from half's largest value to 0: min-error cubic overshoots past
+  // 65504, which half cannot hold.
+  Image in(64, 64, 1);
+  for (long y = 0; y < 64; ++y)
+    for (long x = 0; x < 64; ++x) in.at(x, y, 0) = x < 32 ? 65504.0f : 0.0f;
+  write_half(path("step.exr"), in);
+  // by default: written as float, with a warning
+  Result r = run(path("step.exr") + " -o " + path("d.exr") + " --factor 2");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("beyond half's largest value"), std::string::npos) << r.output;
+  EXPECT_FALSE(ImageReader(path("d.exr")).stores_half());
+  const Image d = read_image(path("d.exr"));
+  const float top = *std::max_element(d.data.begin(), d.data.end());
+  EXPECT_GT(top, 65504.0f);
+  EXPECT_TRUE(std::isfinite(top));
+  // -d half: clamped to +-65504, counted, never infinite
+  r = run(path("step.exr") + " -o " + path("h.exr") + " --factor 2 -d half");
+  ASSERT_EQ(r.status, 0) << r.output;
+  ImageReader h(path("h.exr"));
+  EXPECT_TRUE(h.stores_half());
+  long beyond = 0;
+  for (float v : d.data) beyond += std::abs(v) > 65504.0f;
+  EXPECT_GT(beyond, 0);
+  EXPECT_EQ(h.attribute("sis:half_clamped"), std::to_string(beyond));
+  for (float v : read_image(path("h.exr")).data) EXPECT_LE(std::abs(v), 65504.0f);
 }
 
 TEST_F(Siproject, BitIdenticalForAnyThreadCount) {

@@ -250,11 +250,13 @@ int run(const Options& o) {
   };
 
   // Output samples as the input's (oiiotool's habit): half when every input
-  // stores half, float otherwise.
+  // stores half, float otherwise; a coefficient file records its input's.
   const bool half = std::all_of(readers.begin(), readers.end(),
                                 [](const auto& r) { return r->stores_half(); });
-  const SampleFormat out_format =
-      data_format ? *data_format : half ? SampleFormat::Half : SampleFormat::Float;
+  const bool input_half =
+      is_coefficient_file(reader) ? reader.attribute("sis:input_format") == "half" : half;
+  SampleFormat out_format = input_half ? SampleFormat::Half : SampleFormat::Float;
+  if (data_format) out_format = *data_format;
   const std::string input_label =
       fs::path(reader.path()).filename().string() +
       (readers.size() > 1 ? " and " + std::to_string(readers.size() - 1) + " more bands" : "");
@@ -433,7 +435,31 @@ int run(const Options& o) {
   const bool own_range = local && local->min().width == W && local->min().height == H;
   const RangeReport before = report_range(image, own_range ? local.get() : nullptr);
   apply_clamp(image, clamp, local.get());
-  const RangeReport after = clamp == Clamp::None ? before : report_range(image, nullptr);
+  RangeReport after = clamp == Clamp::None ? before : report_range(image, nullptr);
+  // Half holds magnitudes up to 65504; beyond, a half file would hold
+  // infinities. By default such an output is written as float instead; with
+  // -d half the samples are clamped there, and both are said.
+  constexpr float kHalfMax = 65504.0f;
+  long half_clamped = 0;
+  if (out_format == SampleFormat::Half && !is_8bit_format(o.output) &&
+      (after.max > kHalfMax || after.min < -kHalfMax)) {
+    if (!data_format) {
+      out_format = SampleFormat::Float;
+      if (!o.quiet)
+        std::fprintf(stderr,
+                     "siproject: warning: the output reaches %g, beyond half's largest value "
+                     "65504: written as float (-d half clamps instead)\n",
+                     std::max(after.max, -after.min));
+    } else {
+      for (float& v : image.data)
+        if (std::abs(v) > kHalfMax) v = std::copysign(kHalfMax, v), ++half_clamped;
+      after = report_range(image, nullptr);
+      if (!o.quiet)
+        std::fprintf(stderr,
+                     "siproject: warning: -d half: %ld samples beyond +-65504 clamped there\n",
+                     half_clamped);
+    }
+  }
   const double t_resample = seconds_since(t);
   const bool from_samples = local != nullptr;
   local.reset();  // what is no longer needed goes before the output is written
@@ -452,12 +478,14 @@ int run(const Options& o) {
       {"sis:out_of_range_before_clamp",
        own_range ? std::to_string(before.out_of_range) : std::string("unknown")},
       {"sis:lattice", k.lattice.is_hexagonal() ? "hexagonal" : "cartesian"},
+      {"sis:half_clamped", std::to_string(half_clamped)},
       {"Software", "siproject"},
   };
   t = Clock::now();
   if (!o.coeffs.empty())
     write_coefficients(o.coeffs, k, names,
                        {{"sis:input", md[4].second},
+                        {"sis:input_format", input_half ? "half" : "float"},
                         {"sis:highlight_compress", compressed ? "1" : "0"}});
   std::vector<double>().swap(k.c.data);
   write_image(o.output, image, names, md, alpha, out_format);

@@ -109,16 +109,16 @@ void ImageReader::read(long y0, long y1, SampleFormat format, void* rows) {
           : std::all_of(s.channelformats.begin(), s.channelformats.end(),
                         [&](TypeDesc t) { return t == type; });
   bool ok;
+  // Samples stored as asked are read as stored (TypeDesc::UNKNOWN), straight
+  // into `rows`: OpenImageIO 2.4 stages any call that names a type, even the
+  // stored one, through a buffer (a fresh 64 MB one per call for scanlines),
+  // whose page faults cost more than the decoding of the strip.
+  const TypeDesc asked = stored_as_asked ? TypeDesc::UNKNOWN : type;
   if (s.tile_width > 0)
     ok = impl_->in->read_tiles(0, 0, s.x, s.x + s.width, s.y + y0, s.y + y1, s.z, s.z + 1, 0,
-                               s.nchannels, type, rows);
+                               s.nchannels, asked, rows);
   else
-    // Samples stored as asked are read as stored (TypeDesc::UNKNOWN), straight
-    // into `rows`: OpenImageIO 2.4 stages any call that names a type, even
-    // the stored one, through a fresh 64 MB buffer, whose page faults cost
-    // more than the decoding of the strip.
-    ok = impl_->in->read_scanlines(0, 0, s.y + y0, s.y + y1, s.z, 0, s.nchannels,
-                                   stored_as_asked ? TypeDesc::UNKNOWN : type, rows);
+    ok = impl_->in->read_scanlines(0, 0, s.y + y0, s.y + y1, s.z, 0, s.nchannels, asked, rows);
   if (!ok) {
     std::string why = impl_->in->geterror();
     if (why.empty()) why = "read failed";

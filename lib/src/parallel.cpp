@@ -29,6 +29,10 @@ bool spin_until(const Done& done) {
   return done();
 }
 
+// Set on a thread while it runs parts of a job: a parallel_for made from
+// inside a part runs its chunks in that thread.
+thread_local bool in_part = false;
+
 // Worker threads kept for the life of the process: spawning threads for
 // every strip cost more than the work of a strip. One parallel call runs at a
 // time; a call made while another runs (nested, or from a second thread)
@@ -91,11 +95,13 @@ class WorkerPool {
       const auto* part = part_;
       auto* errors = errors_;
       lock.unlock();
+      in_part = true;
       try {
         (*part)(k);
       } catch (...) {
         (*errors)[k] = std::current_exception();
       }
+      in_part = false;
       lock.lock();
       if (--pending_ == 0) done_.notify_all();
     }
@@ -131,7 +137,7 @@ class WorkerPool {
 void parallel_for(long n, int threads, const std::function<void(long, long)>& fn) {
   const long t = std::max(1L, std::min<long>(threads, n));
   auto chunk = [&](int k) { fn(n * k / t, n * (k + 1) / t); };
-  if (t > 1 && WorkerPool::instance().run(int(t), chunk)) return;
+  if (t > 1 && !in_part && WorkerPool::instance().run(int(t), chunk)) return;
   for (long k = 0; k < t; ++k) chunk(int(k));  // same chunks, in the caller
 }
 
