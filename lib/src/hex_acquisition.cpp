@@ -132,6 +132,12 @@ void HexAcquisition::add(long y0, long y1, const T* rows) {
       BoxSplineSlice s;
       BoxSplineBand band;
       const double inv_h = 1.0 / h, step = dx / h;
+      // The strip columns [qa, qb] whose sample centres lie within reach of xn.
+      auto columns = [&](double xn, double reach) {
+        return std::pair<long, long>(
+            std::max(q0, static_cast<long>(std::ceil((xn - reach) / dx - 0.5))),
+            std::min(qlast, static_cast<long>(std::floor((xn + reach) / dx - 0.5))));
+      };
       for (long w = w0; w < w1; ++w) {
         const long j = work[w];
         double* acc = acc_.row(j);
@@ -149,9 +155,7 @@ void HexAcquisition::add(long y0, long y1, const T* rows) {
               const double reach = (n + ct) * h;
               for (long i = 0; i < Q; ++i) {
                 const double xn = xj + h * i;
-                const long qa = std::max(q0, static_cast<long>(std::ceil((xn - reach) / dx - 0.5)));
-                const long qb =
-                    std::min(qlast, static_cast<long>(std::floor((xn + reach) / dx - 0.5)));
+                const auto [qa, qb] = columns(xn, reach);
                 double* a = acc + std::size_t(i) * Cn;
                 double t = (qa * dx - xn) * inv_h;  // left edge of cell qa
                 std::size_t hint = 0;
@@ -172,9 +176,7 @@ void HexAcquisition::add(long y0, long y1, const T* rows) {
             const double reach = s.half_width * h, hw = s.half_width;
             for (long i = 0; i < Q; ++i) {
               const double xn = xj + h * i;
-              const long qa = std::max(q0, static_cast<long>(std::ceil((xn - reach) / dx - 0.5)));
-              const long qb =
-                  std::min(qlast, static_cast<long>(std::floor((xn + reach) / dx - 0.5)));
+              const auto [qa, qb] = columns(xn, reach);
               double* a = acc + std::size_t(i) * Cn;
               double t = ((qa + 0.5) * dx - xn) * inv_h;
               int p = 0;

@@ -80,12 +80,16 @@ long ImageReader::preferred_strip() const {
   return std::clamp(16 * ((4L << 20) / std::max(1L, row_bytes) / 16), 16L, 64L);
 }
 
-bool ImageReader::stores_half() const {
-  const ImageSpec& s = impl_->spec;
-  if (s.channelformats.empty()) return s.format == TypeDesc::HALF;
+namespace {
+// True when every channel is stored as `type`.
+bool stored_as(const ImageSpec& s, TypeDesc type) {
+  if (s.channelformats.empty()) return s.format == type;
   return std::all_of(s.channelformats.begin(), s.channelformats.end(),
-                     [](TypeDesc t) { return t == TypeDesc::HALF; });
+                     [&](TypeDesc t) { return t == type; });
 }
+}  // namespace
+
+bool ImageReader::stores_half() const { return stored_as(impl_->spec, TypeDesc::HALF); }
 
 void ImageReader::read_rows(long y0, long y1, float* rows) { read(y0, y1, SampleFormat::Float, rows); }
 
@@ -103,17 +107,12 @@ void ImageReader::read(long y0, long y1, SampleFormat format, void* rows) {
     throw InputError(m.str());
   }
   if (y1 == y0) return;
-  const bool stored_as_asked =
-      s.channelformats.empty()
-          ? s.format == type
-          : std::all_of(s.channelformats.begin(), s.channelformats.end(),
-                        [&](TypeDesc t) { return t == type; });
   bool ok;
   // Samples stored as asked are read as stored (TypeDesc::UNKNOWN), straight
   // into `rows`: OpenImageIO 2.4 stages any call that names a type, even the
   // stored one, through a buffer (a fresh 64 MB one per call for scanlines),
   // whose page faults cost more than the decoding of the strip.
-  const TypeDesc asked = stored_as_asked ? TypeDesc::UNKNOWN : type;
+  const TypeDesc asked = stored_as(s, type) ? TypeDesc::UNKNOWN : type;
   if (s.tile_width > 0)
     ok = impl_->in->read_tiles(0, 0, s.x, s.x + s.width, s.y + y0, s.y + y1, s.z, s.z + 1, 0,
                                s.nchannels, asked, rows);
