@@ -571,7 +571,8 @@ int main(int argc, char** argv) {
   app.add_option("--coeffs", o.coeffs, "also write the coefficients as a float EXR with their metadata");
   app.add_option("-d,--data-format", o.data_format,
                  "sample type of an EXR (or other float) output: half or float [default: the "
-                 "input's, as oiiotool does: half when the input stores half]");
+                 "input's, as oiiotool does: half when the input stores half, float where the "
+                 "output passes half's largest value 65504; -d half clamps there instead]");
   app.add_option("--nonfinite", o.nonfinite,
                  "NaN/Inf samples: error, or zero to replace them with 0")->capture_default_str();
   app.add_flag("--highlight-compress", o.highlight_compress,
