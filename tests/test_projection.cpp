@@ -101,9 +101,10 @@ TEST(Acquisition, BitIdenticalForAnyStripAndThreadCount) {
 }
 
 TEST(Acquisition, EveryPathGivesTheSameBits) {
-  // Float rows of 3 and 4 channels take the vectorised filter; double rows
-  // the scalar one, which with the same values must give the same sums; rows
-  // from a function (siproject's path) the same again.
+  // Float rows are widened to double, double rows summed as they are, rows
+  // from a function (siproject's path) arrive in pieces; 3 and 4 channels
+  // take the vectorised horizontal filter, the others the scalar one. With
+  // the same values all must give the same sums.
   for (int C : {1, 2, 3, 4, 5})
     for (const Kernel& k : {Kernel::bspline(1), Kernel::bspline(3), Kernel::mitchell()})
       for (Boundary b : kRules) {
@@ -117,8 +118,8 @@ TEST(Acquisition, EveryPathGivesTheSameBits) {
         Acquisition a(plan, 2);
         for (long y = 0; y < in.height; y += 16) {
           const long y1 = std::min(in.height, y + 16);
-          a.add_rows(y, y1, [&](long row, float* scratch) {
-            std::copy(in.row(row), in.row(row) + in.row_size(), scratch);
+          a.add_rows(y, y1, [&](long row, long k0, long k1, float* scratch) {
+            std::copy(in.row(row) + k0, in.row(row) + k1, scratch);
             return static_cast<const float*>(scratch);
           });
         }

@@ -48,13 +48,18 @@ TEST(LocalRange, MatchesBruteForceAtAnyRatio) {
     for (float& v : in.data) v = u(rng);
     LocalRange lr(win, hin, C, W, H);
     for (long y = 0; y < hin; y += 5) lr.add_rows(y, std::min(hin, y + 5), in.row(y));
-    // the same in two steps, rows reduced in any order, folded by columns
+    // the same in three steps, strips of 3 rows folded in pieces of 7
+    // values (not whole samples), the pieces in decreasing order
     LocalRange split(win, hin, C, W, H);
-    const long E = split.row_entries();
-    std::vector<float> lo(hin * E), hi(hin * E);
-    for (long y = hin - 1; y >= 0; --y) split.reduce_row(in.row(y), &lo[y * E], &hi[y * E]);
-    for (long k0 = 0; k0 < E; k0 += 7)
-      split.add_reduced(0, hin, lo.data(), hi.data(), k0, std::min(E, k0 + 7));
+    const long values = win * C;
+    for (long y0 = 0; y0 < hin; y0 += 3) {
+      const long y1 = std::min(hin, y0 + 3);
+      split.open(y0, y1);
+      for (long k0 = (values - 1) / 7 * 7; k0 >= 0; k0 -= 7)
+        for (long y = y0; y < y1; ++y)
+          split.fold(y, k0, std::min(values, k0 + 7), in.row(y) + k0);
+      split.close(y1);
+    }
     EXPECT_EQ(split.min().data, lr.min().data);
     EXPECT_EQ(split.max().data, lr.max().data);
     // per axis: the samples inside the pixel's interval, or the nearest one

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -266,9 +267,10 @@ int run(const Options& o) {
   bool compressed = o.highlight_compress;
   std::unique_ptr<LocalRange> local;
   const int alpha = reader.alpha_channel();
-  auto for_colour = [&](float* data, std::size_t n, double (*f)(double)) {
+  // f on the colour values of data, values [k0, k0 + n) of interleaved rows
+  auto for_colour = [&](float* data, std::size_t n, double (*f)(double), std::size_t k0 = 0) {
     for (std::size_t q = 0; q < n; ++q)
-      if (int(q % C) != alpha) data[q] = static_cast<float>(f(data[q]));
+      if (int((k0 + q) % C) != alpha) data[q] = static_cast<float>(f(data[q]));
   };
   if (is_coefficient_file(reader)) {
     if (readers.size() > 1) throw UsageError("a coefficient file is evaluated alone, not with other inputs");
@@ -337,10 +339,9 @@ int run(const Options& o) {
       if (half) half_rows[b].resize(strip * row_size);
       if (!half || hex) float_rows[b].resize(strip * row_size);
     }
-    // Per strip row: its local-range reduction and its non-finite samples.
-    const std::size_t entries = std::size_t(local->row_entries());
-    std::vector<float> lo(strip * entries), hi(strip * entries);
-    std::vector<long> bad(strip), bad_first(strip);
+    // Per strip row: its non-finite samples (pieces of a row are checked at
+    // once on different threads).
+    std::vector<std::atomic<long>> bad(strip), bad_first(strip);
     long nonfinite = 0, first_x = -1, first_y = -1;
     int first_c = -1;
     std::string first_file;
@@ -360,41 +361,55 @@ int run(const Options& o) {
         const long y = ch.global, y1 = ch.global + ch.y1 - ch.y0;
         next.get();  // rethrows a read error
         if (i + 1 < chunks.size()) next = std::async(std::launch::async, read, i + 1, int(b ^ 1));
-        // Row r of the strip as float, into `row`: non-finite samples zeroed
-        // (and counted), its local range taken, highlights compressed.
-        auto prepare = [&](long r, float* row) {
-          if (half) half_to_float(half_rows[b].data() + r * row_size, row, row_size);
-          bad[r] = 0;
-          const bool finite = all_finite(row, row_size);
-          for (std::size_t q = 0; q < row_size && !finite; ++q)
-            if (!std::isfinite(row[q])) {
-              if (bad[r]++ == 0) bad_first[r] = long(q);
-              row[q] = 0.0f;
-            }
-          local->reduce_row(row, lo.data() + r * entries, hi.data() + r * entries);
-          if (compressed) for_colour(row, row_size, highlight_compress);
-        };
         const long rows = y1 - y;
+        for (long r = 0; r < rows; ++r) bad[r] = 0, bad_first[r] = LONG_MAX;
+        // Values [k0, k1) of strip row r as float, in v: non-finite samples
+        // zeroed (and counted), ...
+        auto check = [&](long r, long k0, long k1, float* v) {
+          const std::size_t n = std::size_t(k1 - k0);
+          if (half) half_to_float(half_rows[b].data() + r * row_size + k0, v, n);
+          if (all_finite(v, n)) return;
+          long count = 0, first = -1;
+          for (std::size_t q = 0; q < n; ++q)
+            if (!std::isfinite(v[q])) {
+              if (count++ == 0) first = k0 + long(q);
+              v[q] = 0.0f;
+            }
+          bad[r] += count;
+          long seen = bad_first[r].load();
+          while (first < seen && !bad_first[r].compare_exchange_weak(seen, first)) {
+          }
+        };
+        // ... then their local range taken and highlights compressed.
+        auto finish = [&](long r, long k0, long k1, float* v) {
+          local->fold(y + r, k0, k1, v);
+          if (compressed) for_colour(v, std::size_t(k1 - k0), highlight_compress, std::size_t(k0));
+        };
+        local->open(y, y1);
         if (hex) {
           float* data = float_rows[b].data();
+          const long values = long(row_size);
           parallel_for(rows, threads, [&](long r0, long r1) {
-            for (long r = r0; r < r1; ++r) prepare(r, data + r * row_size);
+            for (long r = r0; r < r1; ++r) check(r, 0, values, data + r * row_size);
+          });
+          parallel_for(values, threads, [&](long k0, long k1) {
+            for (long r = 0; r < rows; ++r) finish(r, k0, k1, data + r * row_size + k0);
           });
           hexagonal->add_rows(y, y1, data);
         } else {
-          cartesian->add_rows(y, y1, [&](long gy, float* scratch) {
-            float* row = half ? scratch : float_rows[b].data() + (gy - y) * row_size;
-            prepare(gy - y, row);
-            return row;
+          cartesian->add_rows(y, y1, [&](long gy, long k0, long k1, float* scratch) {
+            const long r = gy - y;
+            float* v = half ? scratch : float_rows[b].data() + r * row_size + k0;
+            check(r, k0, k1, v);
+            finish(r, k0, k1, v);
+            return static_cast<const float*>(v);
           });
         }
-        parallel_for(long(entries), threads, [&](long k0, long k1) {
-          local->add_reduced(y, y1, lo.data(), hi.data(), k0, k1);
-        });
+        local->close(y1);
         for (long r = 0; r < rows; ++r) {
           if (bad[r] && nonfinite == 0) {
             first_c = int(bad_first[r] % C);
-            first_x = bad_first[r] / C;
+            first_x = bad_first[r] / long(C);
             first_y = ch.y0 + r;
             first_file = ch.reader->path();
           }

@@ -49,26 +49,26 @@ AxisWeights acquisition_axis(int axis, long coefficients, long samples, double e
   return w;
 }
 
-// out[n] = sum_e w[e] in[index[e]] per channel, for every target n. The sum
-// over a target's taps k is four interleaved partial sums, p_j over k = j
-// mod 4 in increasing k, combined as (p0 + p1) + (p2 + p3): the four chains
-// run in parallel in the processor, and every path below (scalar, vector,
-// float or double rows) keeps this order, so they give the same bits.
-// Channel counts 1, 3 and 4 are unrolled; a target whose sources are
-// contiguous (all but a few at the borders) runs without index look-ups.
-template <int C, typename T>
-void filter_row_fixed(const AxisWeights& w, const T* in, long targets, double* out) {
-  for (long n = 0; n < targets; ++n) {
+// out[n] = sum_e w[e] in[index[e]] per channel, for the targets [n0, n1).
+// The sum over a target's taps k is four interleaved partial sums, p_j over
+// k = j mod 4 in increasing k, combined as (p0 + p1) + (p2 + p3): the four
+// chains run in parallel in the processor, and every path below (scalar or
+// vector) keeps this order, so they give the same bits. Channel counts 1, 3
+// and 4 are unrolled; a target whose sources are contiguous (all but a few
+// at the borders) runs without index look-ups.
+template <int C>
+void filter_row_fixed(const AxisWeights& w, const double* in, long n0, long n1, double* out) {
+  for (long n = n0; n < n1; ++n) {
     double acc[4][C] = {};
     const long b = w.begin(n), e = w.end(n);
     const double* wt = w.weight.data() + b;
     if (e > b && w.index[e - 1] - w.index[b] == e - 1 - b) {
-      const T* s = in + std::size_t(w.index[b]) * C;
+      const double* s = in + std::size_t(w.index[b]) * C;
       for (long k = 0; k < e - b; ++k)
         for (int c = 0; c < C; ++c) acc[k & 3][c] += wt[k] * s[k * C + c];
     } else {
       for (long k = 0; k < e - b; ++k) {
-        const T* s = in + std::size_t(w.index[b + k]) * C;
+        const double* s = in + std::size_t(w.index[b + k]) * C;
         for (int c = 0; c < C; ++c) acc[k & 3][c] += wt[k] * s[c];
       }
     }
@@ -78,43 +78,37 @@ void filter_row_fixed(const AxisWeights& w, const T* in, long targets, double* o
 }
 
 #if defined(__x86_64__)
-// filter_row_fixed for float rows of three or four channels, with AVX: the
-// channels of a sample in the lanes of one vector (with three, the fourth
-// lane reads the next sample's first channel and is ignored; the row's last
-// sample is loaded alone). Each lane adds the same products in the same
-// order as the scalar loop (no fused multiply-add), so the sums are the same
-// bits.
-__attribute__((target("avx"))) inline __m256d tap(__m256d acc, double weight, __m128 v) {
-  return _mm256_add_pd(acc, _mm256_mul_pd(_mm256_set1_pd(weight), _mm256_cvtps_pd(v)));
+// filter_row_fixed for three or four channels, with AVX: the channels of a
+// sample in the lanes of one vector (with three, the fourth lane reads the
+// next sample's first channel, or the row's padding, and is ignored). Each
+// lane adds the same products in the same order as the scalar loop (no
+// fused multiply-add), so the sums are the same bits.
+__attribute__((target("avx"))) inline __m256d tap(__m256d acc, double weight, const double* s) {
+  return _mm256_add_pd(acc, _mm256_mul_pd(_mm256_set1_pd(weight), _mm256_loadu_pd(s)));
 }
 
 template <int C>
-__attribute__((target("avx"))) void filter_row_avx(const AxisWeights& w, const float* in,
-                                                   long targets, double* out) {
+__attribute__((target("avx"))) void filter_row_avx(const AxisWeights& w, const double* in,
+                                                   long n0, long n1, double* out) {
   static_assert(C == 3 || C == 4);
-  const long last = w.sources - 1;
-  for (long n = 0; n < targets; ++n) {
+  for (long n = n0; n < n1; ++n) {
     __m256d acc[4] = {_mm256_setzero_pd(), _mm256_setzero_pd(), _mm256_setzero_pd(),
                       _mm256_setzero_pd()};
     const long b = w.begin(n), K = w.end(n) - b;
     const double* wt = w.weight.data() + b;
     const long* idx = w.index.data() + b;
-    if (K > 0 && idx[K - 1] - idx[0] == K - 1 && (C == 4 || idx[K - 1] < last)) {
-      const float* s = in + std::size_t(idx[0]) * C;
+    if (K > 0 && idx[K - 1] - idx[0] == K - 1) {
+      const double* s = in + std::size_t(idx[0]) * C;
       long k = 0;
       for (; k + 4 <= K; k += 4) {
-        acc[0] = tap(acc[0], wt[k], _mm_loadu_ps(s + k * C));
-        acc[1] = tap(acc[1], wt[k + 1], _mm_loadu_ps(s + (k + 1) * C));
-        acc[2] = tap(acc[2], wt[k + 2], _mm_loadu_ps(s + (k + 2) * C));
-        acc[3] = tap(acc[3], wt[k + 3], _mm_loadu_ps(s + (k + 3) * C));
+        acc[0] = tap(acc[0], wt[k], s + k * C);
+        acc[1] = tap(acc[1], wt[k + 1], s + (k + 1) * C);
+        acc[2] = tap(acc[2], wt[k + 2], s + (k + 2) * C);
+        acc[3] = tap(acc[3], wt[k + 3], s + (k + 3) * C);
       }
-      for (; k < K; ++k) acc[k & 3] = tap(acc[k & 3], wt[k], _mm_loadu_ps(s + k * C));
+      for (; k < K; ++k) acc[k & 3] = tap(acc[k & 3], wt[k], s + k * C);
     } else {
-      for (long k = 0; k < K; ++k) {
-        const float* s = in + std::size_t(idx[k]) * C;
-        const __m128 v = (C == 4 || idx[k] < last) ? _mm_loadu_ps(s) : _mm_setr_ps(s[0], s[1], s[2], 0.0f);
-        acc[k & 3] = tap(acc[k & 3], wt[k], v);
-      }
+      for (long k = 0; k < K; ++k) acc[k & 3] = tap(acc[k & 3], wt[k], in + std::size_t(idx[k]) * C);
     }
     alignas(32) double a[4];
     _mm256_store_pd(a, _mm256_add_pd(_mm256_add_pd(acc[0], acc[1]), _mm256_add_pd(acc[2], acc[3])));
@@ -128,24 +122,27 @@ bool has_avx() {
 }
 #endif
 
-template <typename T>
-void filter_row(const AxisWeights& w, const T* in, int C, long targets, double* out) {
+// A vertical sum's row holds this many doubles beyond its W_in * C values,
+// zero, so that the vector path may read one sample's four lanes at the end.
+constexpr long kRowPadding = 4;
+
+// One input row (W_in * C values, plus kRowPadding readable) filtered onto
+// the targets [n0, n1).
+void filter_row(const AxisWeights& w, const double* in, int C, long n0, long n1, double* out) {
 #if defined(__x86_64__)
-  if constexpr (std::is_same_v<T, float>) {
-    if (C == 3 && has_avx()) return filter_row_avx<3>(w, in, targets, out);
-    if (C == 4 && has_avx()) return filter_row_avx<4>(w, in, targets, out);
-  }
+  if (C == 3 && has_avx()) return filter_row_avx<3>(w, in, n0, n1, out);
+  if (C == 4 && has_avx()) return filter_row_avx<4>(w, in, n0, n1, out);
 #endif
   switch (C) {
-    case 1: return filter_row_fixed<1>(w, in, targets, out);
-    case 3: return filter_row_fixed<3>(w, in, targets, out);
-    case 4: return filter_row_fixed<4>(w, in, targets, out);
+    case 1: return filter_row_fixed<1>(w, in, n0, n1, out);
+    case 3: return filter_row_fixed<3>(w, in, n0, n1, out);
+    case 4: return filter_row_fixed<4>(w, in, n0, n1, out);
     default: {
       std::vector<double> acc(4 * std::size_t(C));
-      for (long n = 0; n < targets; ++n) {
+      for (long n = n0; n < n1; ++n) {
         std::fill(acc.begin(), acc.end(), 0.0);
         for (long e = w.begin(n); e < w.end(n); ++e) {
-          const T* s = in + std::size_t(w.index[e]) * C;
+          const double* s = in + std::size_t(w.index[e]) * C;
           double* a = acc.data() + ((e - w.begin(n)) & 3) * C;
           for (int c = 0; c < C; ++c) a[c] += w.weight[e] * s[c];
         }
@@ -155,6 +152,47 @@ void filter_row(const AxisWeights& w, const T* in, int C, long targets, double* 
     }
   }
 }
+
+// sums[t][k] += w[t] * x[k] for N rows t at once, x read once: elementwise,
+// a product then a sum, so the same bits at any vector width, which the
+// clones choose by the processor.
+template <int N, typename T>
+__attribute__((target_clones("avx512f", "avx2", "default"))) void add_scaled(
+    double* const* sums, const double* w, const T* __restrict x, long n) {
+  static_assert(N >= 1 && N <= 4);
+  double* __restrict s0 = sums[0];
+  double* __restrict s1 = N > 1 ? sums[1] : nullptr;
+  double* __restrict s2 = N > 2 ? sums[2] : nullptr;
+  double* __restrict s3 = N > 3 ? sums[3] : nullptr;
+  const double w0 = w[0], w1 = N > 1 ? w[1] : 0, w2 = N > 2 ? w[2] : 0, w3 = N > 3 ? w[3] : 0;
+  for (long k = 0; k < n; ++k) {
+    const double v = x[k];
+    s0[k] += w0 * v;
+    if constexpr (N > 1) s1[k] += w1 * v;
+    if constexpr (N > 2) s2[k] += w2 * v;
+    if constexpr (N > 3) s3[k] += w3 * v;
+  }
+}
+
+// x[k] * w[t] added to sums[t] + offset for every t in [0, count).
+template <typename T>
+void add_to_sums(double* const* sums, const double* w, int count, long offset, const T* x, long n) {
+  for (int t = 0; t < count; t += 4) {
+    double* s[4];
+    const int m = std::min(4, count - t);
+    for (int i = 0; i < m; ++i) s[i] = sums[t + i] + offset;
+    switch (m) {
+      case 1: add_scaled<1>(s, w + t, x, n); break;
+      case 2: add_scaled<2>(s, w + t, x, n); break;
+      case 3: add_scaled<3>(s, w + t, x, n); break;
+      default: add_scaled<4>(s, w + t, x, n); break;
+    }
+  }
+}
+
+// Values of a row handed to the vertical pass per call: the vertical sums of
+// a few coefficient rows over one block stay in the first-level cache.
+constexpr long kBlock = 512;
 
 }  // namespace
 
@@ -187,76 +225,93 @@ AcquisitionPlan::AcquisitionPlan(long input_width, long input_height, int channe
 Acquisition::Acquisition(const AcquisitionPlan& plan, int threads)
     : plan_(plan),
       threads_(threads < 1 ? 1 : threads),
-      acc_(plan.coefficients_x(), plan.coefficients_y(), plan.channels()),
-      cursor_(plan.coefficients_y()) {
+      cursor_(plan.coefficients_y()),
+      sums_(plan.coefficients_y()) {
   for (long n = 0; n < plan.coefficients_y(); ++n) cursor_[n] = plan.weights_y().begin(n);
 }
 
 void Acquisition::add_rows(long y0, long y1, const float* rows) {
   const std::size_t row_size = std::size_t(plan_.input_width()) * plan_.channels();
-  add<float>(y0, y1, [&](long y, float*) { return rows + (y - y0) * row_size; }, false);
+  add<float>(y0, y1, [&](long y, long k0, long, float*) { return rows + (y - y0) * row_size + k0; });
 }
 void Acquisition::add_rows(long y0, long y1, const double* rows) {
   const std::size_t row_size = std::size_t(plan_.input_width()) * plan_.channels();
-  add<double>(y0, y1, [&](long y, double*) { return rows + (y - y0) * row_size; }, false);
+  add<double>(y0, y1, [&](long y, long k0, long, double*) { return rows + (y - y0) * row_size + k0; });
 }
-void Acquisition::add_rows(long y0, long y1, const RowSource& row) {
-  add<float>(y0, y1, row, true);
+void Acquisition::add_rows(long y0, long y1, const PieceSource& piece) { add<float>(y0, y1, piece); }
+
+// The horizontal pass of the complete rows, targets [n0, n1) of part `part`.
+void Acquisition::filter_complete(long part, long parts) {
+  const long ncx = plan_.coefficients_x();
+  const long n0 = ncx * part / parts, n1 = ncx * (part + 1) / parts;
+  for (long m : complete_)
+    filter_row(plan_.weights_x(), sums_[m].data(), plan_.channels(), n0, n1, acc_.row(m));
 }
 
-// row(y, scratch) -> const T*: input row y; scratch has room for a row when
-// `scratch_row` is set.
-template <typename T, typename Row>
-void Acquisition::add(long y0, long y1, const Row& row, bool scratch_row) {
+void Acquisition::release_complete() {
+  for (long m : complete_) spare_.push_back(std::move(sums_[m]));
+  complete_.clear();
+}
+
+// piece(y, k0, k1, scratch) -> const T*: values [k0, k1) of input row y.
+template <typename T, typename Piece>
+void Acquisition::add(long y0, long y1, const Piece& piece) {
   if (y0 != next_row_ || y1 < y0 || y1 > plan_.input_height()) {
     std::ostringstream m;
     m << "Acquisition::add_rows(): rows [" << y0 << ", " << y1 << ") out of order (next row "
       << next_row_ << " of " << plan_.input_height() << ")";
     throw std::logic_error(m.str());
   }
-  const int C = plan_.channels();
-  const long win = plan_.input_width(), ncx = plan_.coefficients_x();
-  const AxisWeights& wx = plan_.weights_x();
+  const long values = plan_.input_width() * plan_.channels();
   const AxisWeights& wy = plan_.weights_y();
-  const std::size_t hrow = std::size_t(ncx) * C;
-  strip_.resize(hrow * (y1 - y0));  // every entry is written by the horizontal pass
+  if (acc_.data.empty())  // here, not in the constructor: a caller may overlap this with reading
+    acc_ = Grid<double>(plan_.coefficients_x(), plan_.coefficients_y(), plan_.channels());
 
-  // Horizontal pass: each input row filtered onto the coefficient columns.
-  parallel_for(y1 - y0, threads_, [&](long r0, long r1) {
-    std::vector<T> scratch(scratch_row ? std::size_t(win) * C : 0);
-    for (long r = r0; r < r1; ++r)
-      filter_row(wx, row(y0 + r, scratch.data()), C, ncx, strip_.data() + r * hrow);
-  });
+  // The coefficient rows each input row adds to (their vertical sums and
+  // weights); rows summed to the end here are filtered in the next call.
+  std::vector<std::vector<double*>> row_sums(y1 - y0);
+  std::vector<std::vector<double>> row_weights(y1 - y0);
+  std::vector<long> completed;
+  for (long n = 0; n < plan_.coefficients_y(); ++n) {
+    long e = cursor_[n];
+    if (e == wy.end(n) || wy.index[e] >= y1) continue;
+    if (sums_[n].empty()) {
+      if (spare_.empty()) {
+        sums_[n].assign(values + kRowPadding, 0.0);
+      } else {
+        sums_[n] = std::move(spare_.back());
+        spare_.pop_back();
+        std::fill(sums_[n].begin(), sums_[n].end(), 0.0);
+      }
+    }
+    for (; e < wy.end(n) && wy.index[e] < y1; ++e) {
+      row_sums[wy.index[e] - y0].push_back(sums_[n].data());
+      row_weights[wy.index[e] - y0].push_back(wy.weight[e]);
+    }
+    cursor_[n] = e;
+    if (e == wy.end(n)) completed.push_back(n);
+  }
 
-  // Vertical pass: each coefficient row adds the rows of this strip in its
-  // support, in increasing row order. The few rows a strip touches are split
-  // among the threads by columns, so every thread has work; each sum keeps
-  // its order whatever the split.
-  long first = -1, last = -1;  // coefficient rows this strip touches
-  for (long n = 0; n < plan_.coefficients_y(); ++n)
-    if (cursor_[n] < wy.end(n) && wy.index[cursor_[n]] < y1) {
-      if (first < 0) first = n;
-      last = n;
-    }
-  if (first >= 0) {
-    std::vector<long> stop(last - first + 1);
-    for (long n = first; n <= last; ++n) {
-      long e = cursor_[n];
-      while (e < wy.end(n) && wy.index[e] < y1) ++e;
-      stop[n - first] = e;
-    }
-    parallel_for(long(hrow), threads_, [&](long k0, long k1) {
-      for (long n = first; n <= last; ++n) {
-        double* acc = acc_.row(n);
-        for (long e = cursor_[n]; e < stop[n - first]; ++e) {
-          const double w = wy.weight[e];
-          const double* h = strip_.data() + std::size_t(wy.index[e] - y0) * hrow;
-          for (long k = k0; k < k1; ++k) acc[k] += w * h[k];
+  // Each part: its share of the targets of the rows completed before, then
+  // its share of the columns of this strip's rows, block by block, row by
+  // row in increasing order.
+  const long parts = std::min<long>(threads_, std::max(1L, values / kBlock));
+  parallel_for(parts, threads_, [&](long p0, long p1) {
+    std::vector<T> scratch(kBlock);
+    for (long part = p0; part < p1; ++part) {
+      filter_complete(part, parts);
+      const long k0 = values * part / parts, k1 = values * (part + 1) / parts;
+      for (long b = k0; b < k1; b += kBlock) {
+        const long len = std::min(k1, b + kBlock) - b;
+        for (long r = 0; r < y1 - y0; ++r) {
+          const T* x = piece(y0 + r, b, b + len, scratch.data());
+          add_to_sums(row_sums[r].data(), row_weights[r].data(), int(row_sums[r].size()), b, x, len);
         }
       }
-    });
-    for (long n = first; n <= last; ++n) cursor_[n] = stop[n - first];
-  }
+    }
+  });
+  release_complete();
+  complete_ = std::move(completed);
   next_row_ = y1;
 }
 
@@ -267,6 +322,11 @@ Coefficients Acquisition::finish() {
       << " rows were added";
     throw std::logic_error(m.str());
   }
+  parallel_for(threads_, threads_, [&](long p0, long p1) {
+    for (long part = p0; part < p1; ++part) filter_complete(part, threads_);
+  });
+  release_complete();
+  spare_.clear();
   Coefficients out;
   out.c = std::move(acc_);
   out.lattice = plan_.lattice();

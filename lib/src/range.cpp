@@ -66,112 +66,145 @@ std::string clamp_name(Clamp c) {
 }
 
 LocalRange::LocalRange(long input_width, long input_height, int channels, long width, long height)
-    : win_(input_width),
-      channels_(channels),
-      min_(width, height, channels),
-      max_(width, height, channels) {
+    : win_(input_width), width_(width), height_(height), channels_(channels) {
   pixel_ranges(input_width, width, x_begin_, x_end_);
   pixel_ranges(input_height, height, y_begin_, y_end_);
-  std::fill(min_.data.begin(), min_.data.end(), std::numeric_limits<float>::infinity());
-  std::fill(max_.data.begin(), max_.data.end(), -std::numeric_limits<float>::infinity());
 }
 
 namespace {
-// Min/max over the samples [x_begin[n], x_end[n]) of one row into lo/hi.
-template <int C>
-void row_range_fixed(const float* row, const long* xb, const long* xe, long width, float* lo,
-                     float* hi) {
+// out[k] = min(out[k], in[k]) (or max), elementwise: v < o ? v : o, which a
+// vector min computes too, so every clone gives the same values.
+__attribute__((target_clones("avx512f", "avx2", "default"))) void fold_min(float* __restrict out,
+                                                                const float* __restrict in, long n) {
+  for (long k = 0; k < n; ++k) out[k] = in[k] < out[k] ? in[k] : out[k];
+}
+__attribute__((target_clones("avx512f", "avx2", "default"))) void fold_max(float* __restrict out,
+                                                                const float* __restrict in, long n) {
+  for (long k = 0; k < n; ++k) out[k] = in[k] > out[k] ? in[k] : out[k];
+}
+
+// Min (Max = false: max) over the samples [xb[n], xe[n]) of one row into out.
+template <bool Min, int C>
+void across_fixed(const float* row, const long* xb, const long* xe, long width, float* out) {
   for (long n = 0; n < width; ++n) {
-    float l[C], h[C];
-    for (int c = 0; c < C; ++c) l[c] = INFINITY, h[c] = -INFINITY;
+    float a[C];
+    for (int c = 0; c < C; ++c) a[c] = Min ? INFINITY : -INFINITY;
     for (long i = xb[n]; i < xe[n]; ++i)
       for (int c = 0; c < C; ++c) {
         const float v = row[std::size_t(i) * C + c];
-        l[c] = v < l[c] ? v : l[c];
-        h[c] = v > h[c] ? v : h[c];
+        a[c] = Min ? (v < a[c] ? v : a[c]) : (v > a[c] ? v : a[c]);
       }
-    for (int c = 0; c < C; ++c) lo[n * C + c] = l[c], hi[n * C + c] = h[c];
+    for (int c = 0; c < C; ++c) out[n * C + c] = a[c];
   }
 }
-}  // namespace
 
 #if defined(__SSE2__)
 // Three or four channels at once. With three, the fourth lane reads the next
 // sample's first channel (ignored), except at the row's last sample.
-template <int C>
-void row_range_sse(const float* row, const long* xb, const long* xe, long width, long samples,
-                   float* lo, float* hi) {
+template <bool Min, int C>
+void across_sse(const float* row, const long* xb, const long* xe, long width, long samples,
+                float* out) {
   static_assert(C == 3 || C == 4);
   for (long n = 0; n < width; ++n) {
-    __m128 l = _mm_set1_ps(INFINITY), h = _mm_set1_ps(-INFINITY);
-    const long end = (C == 4 || xe[n] < samples) ? xe[n] : xe[n] - 1;  // loads of 4 stay in the row
-    for (long i = xb[n]; i < end; ++i) {
+    __m128 a = _mm_set1_ps(Min ? INFINITY : -INFINITY);
+    const long last = (C == 4 || xe[n] < samples) ? xe[n] : xe[n] - 1;  // loads of 4 stay in the row
+    for (long i = xb[n]; i < last; ++i) {
       const __m128 v = _mm_loadu_ps(row + std::size_t(i) * C);
-      l = _mm_min_ps(v, l);  // v < l ? v : l, as row_range_fixed
-      h = _mm_max_ps(v, h);
+      a = Min ? _mm_min_ps(v, a) : _mm_max_ps(v, a);  // v < a ? v : a, as across_fixed
     }
-    if (end < xe[n]) {
-      const float* s = row + std::size_t(end) * C;
+    if (last < xe[n]) {
+      const float* s = row + std::size_t(last) * C;
       const __m128 v = _mm_setr_ps(s[0], s[1], s[2], 0.0f);
-      l = _mm_min_ps(v, l);
-      h = _mm_max_ps(v, h);
+      a = Min ? _mm_min_ps(v, a) : _mm_max_ps(v, a);
     }
-    alignas(16) float a[4], b[4];
-    _mm_store_ps(a, l);
-    _mm_store_ps(b, h);
-    for (int c = 0; c < C; ++c) lo[n * C + c] = a[c], hi[n * C + c] = b[c];
+    alignas(16) float r[4];
+    _mm_store_ps(r, a);
+    for (int c = 0; c < C; ++c) out[n * C + c] = r[c];
   }
 }
 #endif
 
-void LocalRange::reduce_row(const float* row, float* lo, float* hi) const {
-  const int C = channels_;
+template <bool Min>
+void across(const float* row, const long* xb, const long* xe, long width, long samples, int C,
+            float* out) {
 #if defined(__SSE2__)
-  if (C == 3) return row_range_sse<3>(row, x_begin_.data(), x_end_.data(), min_.width, win_, lo, hi);
-  if (C == 4) return row_range_sse<4>(row, x_begin_.data(), x_end_.data(), min_.width, win_, lo, hi);
+  if (C == 3) return across_sse<Min, 3>(row, xb, xe, width, samples, out);
+  if (C == 4) return across_sse<Min, 4>(row, xb, xe, width, samples, out);
 #endif
   switch (C) {
-    case 1: return row_range_fixed<1>(row, x_begin_.data(), x_end_.data(), min_.width, lo, hi);
-    case 3: return row_range_fixed<3>(row, x_begin_.data(), x_end_.data(), min_.width, lo, hi);
-    case 4: return row_range_fixed<4>(row, x_begin_.data(), x_end_.data(), min_.width, lo, hi);
+    case 1: return across_fixed<Min, 1>(row, xb, xe, width, out);
+    case 3: return across_fixed<Min, 3>(row, xb, xe, width, out);
+    case 4: return across_fixed<Min, 4>(row, xb, xe, width, out);
     default:
-      for (long n = 0; n < min_.width; ++n)
+      for (long n = 0; n < width; ++n)
         for (int c = 0; c < C; ++c) {
-          float l = INFINITY, h = -INFINITY;
-          for (long i = x_begin_[n]; i < x_end_[n]; ++i) {
+          float a = Min ? INFINITY : -INFINITY;
+          for (long i = xb[n]; i < xe[n]; ++i) {
             const float v = row[std::size_t(i) * C + c];
-            l = std::min(l, v);
-            h = std::max(h, v);
+            a = Min ? (v < a ? v : a) : (v > a ? v : a);
           }
-          lo[n * C + c] = l;
-          hi[n * C + c] = h;
+          out[n * C + c] = a;
         }
   }
 }
+}  // namespace
 
-void LocalRange::add_reduced(long y0, long y1, const float* lo, const float* hi, long k0, long k1) {
-  const std::size_t entries = std::size_t(row_entries());
-  for (long m = 0; m < min_.height; ++m) {
-    const long a = std::max(y0, y_begin_[m]), b = std::min(y1, y_end_[m]);
-    float* mn = min_.row(m);
-    float* mx = max_.row(m);
-    for (long j = a; j < b; ++j) {
-      const float* l = lo + std::size_t(j - y0) * entries;
-      const float* h = hi + std::size_t(j - y0) * entries;
-      for (long k = k0; k < k1; ++k) {
-        mn[k] = l[k] < mn[k] ? l[k] : mn[k];
-        mx[k] = h[k] > mx[k] ? h[k] : mx[k];
-      }
+void LocalRange::open(long y0, long y1) {
+  const std::size_t values = std::size_t(win_) * channels_;
+  auto columns = [&] {
+    if (spare_.empty()) return std::vector<float>(values);
+    std::vector<float> v = std::move(spare_.back());
+    spare_.pop_back();
+    return v;
+  };
+  if (min_.data.empty()) {  // here, not in the constructor: a caller may overlap this with reading
+    min_ = Image(width_, height_, channels_);
+    max_ = Image(width_, height_, channels_);
+    std::fill(min_.data.begin(), min_.data.end(), std::numeric_limits<float>::infinity());
+    std::fill(max_.data.begin(), max_.data.end(), -std::numeric_limits<float>::infinity());
+  }
+  open_y0_ = y0;
+  strip_targets_.assign(y1 - y0, {});
+  // output rows are in order of their input rows
+  for (; next_open_ < height_ && y_begin_[next_open_] < y1; ++next_open_)
+    open_.push_back({next_open_, columns(), columns()});
+  for (Open& o : open_)
+    for (long y = std::max(y0, y_begin_[o.row]); y < std::min(y1, y_end_[o.row]); ++y)
+      strip_targets_[y - y0].push_back({o.lo.data(), o.hi.data(), y == y_begin_[o.row]});
+}
+
+void LocalRange::fold(long y, long k0, long k1, const float* values) {
+  for (const Target& t : strip_targets_[y - open_y0_]) {
+    if (t.first) {
+      std::copy(values, values + (k1 - k0), t.lo + k0);
+      std::copy(values, values + (k1 - k0), t.hi + k0);
+    } else {
+      fold_min(t.lo + k0, values, k1 - k0);
+      fold_max(t.hi + k0, values, k1 - k0);
     }
   }
 }
 
+void LocalRange::close(long y1) {
+  const long W = min_.width;
+  for (Open& o : open_)
+    if (y_end_[o.row] <= y1) {
+      across<true>(o.lo.data(), x_begin_.data(), x_end_.data(), W, win_, channels_, min_.row(o.row));
+      across<false>(o.hi.data(), x_begin_.data(), x_end_.data(), W, win_, channels_, max_.row(o.row));
+      spare_.push_back(std::move(o.lo));
+      spare_.push_back(std::move(o.hi));
+    }
+  open_.erase(std::remove_if(open_.begin(), open_.end(),
+                             [&](const Open& o) { return y_end_[o.row] <= y1; }),
+              open_.end());
+  strip_targets_.clear();
+}
+
 void LocalRange::add_rows(long y0, long y1, const float* rows) {
-  std::vector<float> lo(row_entries()), hi(row_entries());
-  for (long j = y0; j < y1; ++j) {
-    reduce_row(rows + std::size_t(j - y0) * win_ * channels_, lo.data(), hi.data());
-    add_reduced(j, j + 1, lo.data(), hi.data(), 0, row_entries());
-  }
+  const long values = win_ * channels_;
+  open(y0, y1);
+  for (long y = y0; y < y1; ++y) fold(y, 0, values, rows + std::size_t(y - y0) * values);
+  close(y1);
 }
 
 RangeReport report_range(const Image& image, const LocalRange* local) {

@@ -53,18 +53,29 @@ class AcquisitionPlan {
 
 // Streams rows through a plan. Rows must arrive in order, each once.
 // The result does not depend on the strip sizes or the thread count.
+//
+// Order of the sums (every path keeps it, so float rows, double rows and
+// rows from a function give the same bits): each coefficient row's
+// vertical sum s_m = sum_j wy[m][j] f_j over its input rows j in increasing
+// j (elementwise over the row, split among the threads by columns), then
+// each coefficient r[n][m] = sum_i wx[n][i] s_m[i] as four interleaved
+// partial sums combined as (p0 + p1) + (p2 + p3). The vertical pass is
+// elementwise, so it runs on whole vectors whatever the channel count; a
+// coefficient row is filtered horizontally once complete, in the next call.
 class Acquisition {
  public:
   explicit Acquisition(const AcquisitionPlan& plan, int threads = 1);
   // Rows [y0, y1) of the input, interleaved, W_in * channels per row.
   void add_rows(long y0, long y1, const float* rows);
   void add_rows(long y0, long y1, const double* rows);
-  // Rows [y0, y1) from a function: row(y, scratch) returns input row y
-  // (W_in * channels floats), written into scratch (room for one row) or
-  // held elsewhere. Called once per row, on the worker threads, so that
-  // per-row work (decoding, checks) runs in parallel with the filtering.
-  using RowSource = std::function<const float*(long y, float* scratch)>;
-  void add_rows(long y0, long y1, const RowSource& row);
+  // Rows [y0, y1) from a function, in pieces: piece(y, k0, k1, scratch)
+  // returns values [k0, k1) of input row y (W_in * channels values per
+  // row), written into scratch (room for k1 - k0 floats) or held elsewhere.
+  // The pieces of a row are disjoint and cover it; each is asked for once,
+  // on the worker threads, pieces of different rows and columns at once, so
+  // that per-row work (decoding, checks) runs in parallel with the sums.
+  using PieceSource = std::function<const float*(long y, long k0, long k1, float* scratch)>;
+  void add_rows(long y0, long y1, const PieceSource& piece);
   long next_row() const { return next_row_; }
   // The acquired coefficients r[n] (min-error) or pixels p[n] (conventional).
   Coefficients finish();
@@ -74,10 +85,14 @@ class Acquisition {
   int threads_;
   long next_row_ = 0;
   Grid<double> acc_;
-  std::vector<long> cursor_;     // per coefficient row: next entry of weights_y
-  std::vector<double> strip_;    // horizontally filtered rows of the current strip
-  template <typename T, typename Row>
-  void add(long y0, long y1, const Row& row, bool scratch_row);
+  std::vector<long> cursor_;               // per coefficient row: next entry of weights_y
+  std::vector<std::vector<double>> sums_;  // per coefficient row: its vertical sum while open
+  std::vector<std::vector<double>> spare_; // released sums, reused
+  std::vector<long> complete_;             // rows summed, not yet filtered horizontally
+  template <typename T, typename Piece>
+  void add(long y0, long y1, const Piece& piece);
+  void filter_complete(long part, long parts);
+  void release_complete();
 };
 
 // Convenience: acquires a whole in-memory image.

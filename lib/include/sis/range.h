@@ -29,22 +29,40 @@ class LocalRange {
  public:
   LocalRange(long input_width, long input_height, int channels, long width, long height);
   void add_rows(long y0, long y1, const float* rows);
-  // add_rows in two steps, for callers that handle rows in parallel: the
-  // min/max of one input row over each output pixel's columns into lo and hi
-  // (width * channels entries each), ...
-  void reduce_row(const float* row, float* lo, float* hi) const;
-  // ... then reduced rows [y0, y1) folded into the output pixels' ranges,
-  // entries [k0, k1) of each output row only (a split by columns).
-  void add_reduced(long y0, long y1, const float* lo, const float* hi, long k0, long k1);
-  long row_entries() const { return min_.width * channels_; }
+  // add_rows in three steps, for callers that split rows by columns. Each
+  // output row's range is taken down its input rows first (elementwise, per
+  // input column) and across its pixels' columns once complete. open(y0, y1)
+  // before rows [y0, y1); then fold(y, k0, k1, values) for values [k0, k1)
+  // of each of those rows (W_in * channels values per row; calls for
+  // disjoint [k0, k1) may run at once, the rows of the same columns in
+  // increasing order); then close(y1).
+  void open(long y0, long y1);
+  void fold(long y, long k0, long k1, const float* values);
+  void close(long y1);
+  // The ranges (empty before the first rows are added).
   const Image& min() const { return min_; }
   const Image& max() const { return max_; }
 
  private:
   std::vector<long> x_begin_, x_end_, y_begin_, y_end_;  // sample index ranges per pixel
-  long win_;
+  long win_, width_, height_;
   int channels_;
   Image min_, max_;
+  // Output rows being taken: per input column, the min and max down their
+  // input rows so far (their first input row is copied, the others folded
+  // in); the output rows each row of the open strip goes to.
+  struct Open {
+    long row;
+    std::vector<float> lo, hi;
+  };
+  struct Target {
+    float *lo, *hi;
+    bool first;  // the output row's first input row
+  };
+  std::vector<Open> open_;
+  std::vector<std::vector<float>> spare_;           // released columns, reused
+  std::vector<std::vector<Target>> strip_targets_;  // per row of the open strip
+  long open_y0_ = 0, next_open_ = 0;
 };
 
 // What the displayed samples do with the range, before any clamp.
