@@ -58,8 +58,17 @@ TEST_F(Siproject, HalfSamplesConvertAsOpenImageIOConvertsThem) {
   r.read_rows(0, 256, theirs.data());
   r.read_rows_half(0, 256, stored.data());
   EXPECT_EQ(stored, bits);
-  half_to_float(stored.data(), ours.data(), 65533);  // a length that is not a whole vector
-  half_to_float(stored.data() + 65533, ours.data() + 65533, 3);
+  // a length that is not a whole vector; the patterns below 0x7c00 (half's
+  // positive finite values) report finite, any range holding 0x7c00 (+Inf)
+  // or the patterns above 0xfc00 (-Inf and NaN) does not
+  EXPECT_FALSE(half_to_float(stored.data(), ours.data(), 65533));
+  EXPECT_FALSE(half_to_float(stored.data() + 65533, ours.data() + 65533, 3));
+  std::vector<float> scratch(0x7c00 + 1);
+  EXPECT_TRUE(half_to_float(stored.data(), scratch.data(), 0x7c00));
+  EXPECT_FALSE(half_to_float(stored.data(), scratch.data(), 0x7c01));
+  EXPECT_FALSE(half_to_float(stored.data() + 0x7c00, scratch.data(), 1));
+  EXPECT_TRUE(half_to_float(stored.data() + 0x8000, scratch.data(), 0x7c00));  // negative finite
+  EXPECT_FALSE(half_to_float(stored.data() + 0x8000, scratch.data(), 0x7c01));
   long nan = 0;
   for (std::size_t q = 0; q < bits.size(); ++q) {
     if (std::isnan(theirs[q])) {

@@ -367,8 +367,8 @@ int run(const Options& o) {
         // zeroed (and counted), ...
         auto check = [&](long r, long k0, long k1, float* v) {
           const std::size_t n = std::size_t(k1 - k0);
-          if (half) half_to_float(half_rows[b].data() + r * row_size + k0, v, n);
-          if (all_finite(v, n)) return;
+          if (half ? half_to_float(half_rows[b].data() + r * row_size + k0, v, n) : all_finite(v, n))
+            return;
           long count = 0, first = -1;
           for (std::size_t q = 0; q < n; ++q)
             if (!std::isfinite(v[q])) {
@@ -448,9 +448,9 @@ int run(const Options& o) {
   Image image = final_image(k, shown, W, H, threads);
   if (compressed) for_colour(image.data.data(), image.data.size(), highlight_expand);
   const bool own_range = local && local->min().width == W && local->min().height == H;
-  const RangeReport before = report_range(image, own_range ? local.get() : nullptr);
+  const RangeReport before = report_range(image, own_range ? local.get() : nullptr, threads);
   apply_clamp(image, clamp, local.get());
-  RangeReport after = clamp == Clamp::None ? before : report_range(image, nullptr);
+  RangeReport after = clamp == Clamp::None ? before : report_range(image, nullptr, threads);
   // Half holds magnitudes up to 65504; beyond, a half file would hold
   // infinities. By default such an output is written as float instead; with
   // -d half the samples are clamped there, and both are said.
@@ -468,7 +468,7 @@ int run(const Options& o) {
     } else {
       for (float& v : image.data)
         if (std::abs(v) > kHalfMax) v = std::copysign(kHalfMax, v), ++half_clamped;
-      after = report_range(image, nullptr);
+      after = report_range(image, nullptr, threads);
       if (!o.quiet)
         std::fprintf(stderr,
                      "siproject: warning: -d half: %ld samples beyond +-65504 clamped there\n",

@@ -136,24 +136,44 @@ SampleFormat parse_sample_format(const std::string& spelling) {
 
 std::string sample_format_name(SampleFormat f) { return f == SampleFormat::Half ? "half" : "float"; }
 
+namespace {
+// A half is infinite or NaN when its exponent bits are all ones.
+constexpr std::uint16_t kHalfExponent = 0x7c00;
+}  // namespace
+
 #if defined(__x86_64__)
 namespace {
-__attribute__((target("avx,f16c"))) void half_to_float_f16c(const std::uint16_t* in, float* out,
+__attribute__((target("avx,f16c"))) bool half_to_float_f16c(const std::uint16_t* in, float* out,
                                                            std::size_t n) {
+  const __m128i exponent = _mm_set1_epi16(std::int16_t(kHalfExponent));
+  __m128i special = _mm_setzero_si128();
   std::size_t q = 0;
-  for (; q + 8 <= n; q += 8)
-    _mm256_storeu_ps(out + q, _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(in + q))));
-  for (; q < n; ++q) out[q] = _cvtsh_ss(in[q]);
+  for (; q + 8 <= n; q += 8) {
+    const __m128i h = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + q));
+    special = _mm_or_si128(special, _mm_cmpeq_epi16(_mm_and_si128(h, exponent), exponent));
+    _mm256_storeu_ps(out + q, _mm256_cvtph_ps(h));
+  }
+  bool finite = _mm_movemask_epi8(special) == 0;
+  for (; q < n; ++q) {
+    out[q] = _cvtsh_ss(in[q]);
+    finite = finite && (in[q] & kHalfExponent) != kHalfExponent;
+  }
+  return finite;
 }
 }  // namespace
 #endif
 
-void half_to_float(const std::uint16_t* in, float* out, std::size_t n) {
+bool half_to_float(const std::uint16_t* in, float* out, std::size_t n) {
 #if defined(__x86_64__)
   static const bool f16c = __builtin_cpu_supports("f16c") && __builtin_cpu_supports("avx");
   if (f16c) return half_to_float_f16c(in, out, n);
 #endif
-  for (std::size_t q = 0; q < n; ++q) out[q] = imath_half_to_float(in[q]);
+  bool finite = true;
+  for (std::size_t q = 0; q < n; ++q) {
+    out[q] = imath_half_to_float(in[q]);
+    finite = finite && (in[q] & kHalfExponent) != kHalfExponent;
+  }
+  return finite;
 }
 
 Image read_image(const std::string& path) {

@@ -9,6 +9,7 @@
 #include <immintrin.h>
 #endif
 
+#include "sis/parallel.h"
 #include "sis/prefilter.h"
 #include "sis/resample.h"
 
@@ -207,24 +208,38 @@ void LocalRange::add_rows(long y0, long y1, const float* rows) {
   close(y1);
 }
 
-RangeReport report_range(const Image& image, const LocalRange* local) {
-  RangeReport r;
-  r.min = std::numeric_limits<double>::infinity();
-  r.max = -r.min;
-  r.samples = long(image.data.size());
-  for (std::size_t q = 0; q < image.data.size(); ++q) {
-    const float v = image.data[q];
-    r.min = std::min<double>(r.min, v);
-    r.max = std::max<double>(r.max, v);
-    if (v < 0) ++r.negative;
-    if (local) {
-      // float rounding of the projection chain is about 1e-6 relative:
-      // departures below 1e-5 of the local scale do not count
-      const float lo = local->min().data[q], hi = local->max().data[q];
-      const float tol = 1e-5f * std::max({1.0f, std::abs(lo), std::abs(hi)});
-      if (v < lo - tol || v > hi + tol) ++r.out_of_range;
+RangeReport report_range(const Image& image, const LocalRange* local, int threads) {
+  const long n = long(image.data.size());
+  const long parts = std::max(1L, std::min<long>(threads, n / 65536));
+  std::vector<RangeReport> part(parts);
+  parallel_for(parts, threads, [&](long p0, long p1) {
+    for (long p = p0; p < p1; ++p) {
+      RangeReport& r = part[p];
+      r.min = std::numeric_limits<double>::infinity();
+      r.max = -r.min;
+      for (long q = n * p / parts; q < n * (p + 1) / parts; ++q) {
+        const float v = image.data[q];
+        r.min = std::min<double>(r.min, v);
+        r.max = std::max<double>(r.max, v);
+        if (v < 0) ++r.negative;
+        if (local) {
+          // float rounding of the projection chain is about 1e-6 relative:
+          // departures below 1e-5 of the local scale do not count
+          const float lo = local->min().data[q], hi = local->max().data[q];
+          const float tol = 1e-5f * std::max({1.0f, std::abs(lo), std::abs(hi)});
+          if (v < lo - tol || v > hi + tol) ++r.out_of_range;
+        }
+      }
     }
+  });
+  RangeReport r = part[0];
+  for (long p = 1; p < parts; ++p) {
+    r.min = std::min(r.min, part[p].min);
+    r.max = std::max(r.max, part[p].max);
+    r.negative += part[p].negative;
+    r.out_of_range += part[p].out_of_range;
   }
+  r.samples = n;
   return r;
 }
 

@@ -104,31 +104,16 @@ void apply_separable(const Grid<double>& c, const AxisWeights& wx, const AxisWei
                      double scale, Grid<T>& acc, int threads) {
   const int C = c.channels;
   parallel_for(acc.height, threads, [&](long j0, long j1) {
-    std::vector<double> tmp(c.row_size());
+    std::vector<double> tmp(c.row_size()), row(std::size_t(acc.width) * C);
     for (long j = j0; j < j1; ++j) {
       std::fill(tmp.begin(), tmp.end(), 0.0);
       for (long e = wy.begin(j); e < wy.end(j); ++e) {
-        const double w = wy.weight[e];
-        const double* src = c.row(wy.index[e]);
-        for (std::size_t q = 0; q < tmp.size(); ++q) tmp[q] += w * src[q];
+        double* sums = tmp.data();
+        add_scaled_rows(&sums, &wy.weight[e], 1, 0, c.row(wy.index[e]), long(tmp.size()));
       }
+      apply_weights(wx, tmp.data(), C, 0, acc.width, row.data());
       T* out = acc.row(j);
-      for (long i = 0; i < acc.width; ++i) {
-        double v[16] = {0};
-        double* vv = C <= 16 ? v : nullptr;
-        std::vector<double> big;
-        if (!vv) {
-          big.assign(C, 0.0);
-          vv = big.data();
-        }
-        for (long e = wx.begin(i); e < wx.end(i); ++e) {
-          const double w = wx.weight[e];
-          const double* s = tmp.data() + std::size_t(wx.index[e]) * C;
-          for (int ch = 0; ch < C; ++ch) vv[ch] += w * s[ch];
-        }
-        for (int ch = 0; ch < C; ++ch)
-          out[std::size_t(i) * C + ch] = static_cast<T>(out[std::size_t(i) * C + ch] + scale * vv[ch]);
-      }
+      for (std::size_t q = 0; q < row.size(); ++q) out[q] = static_cast<T>(out[q] + scale * row[q]);
     }
   });
 }

@@ -93,6 +93,7 @@ class Acquisition {
   void add(long y0, long y1, const Piece& piece);
   void filter_complete(long part, long parts);
   void release_complete();
+  double* sums_of(long m);
 };
 
 // Convenience: acquires a whole in-memory image.

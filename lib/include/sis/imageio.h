@@ -31,8 +31,9 @@ SampleFormat parse_sample_format(const std::string& spelling);  // half | float
 std::string sample_format_name(SampleFormat f);
 
 // IEEE half-precision bits to float, exactly (every half is a float); with
-// the processor's F16C conversion where it has one.
-void half_to_float(const std::uint16_t* in, float* out, std::size_t n);
+// the processor's F16C conversion where it has one. Returns whether every
+// value was finite (a check on the half bits, in the same pass).
+bool half_to_float(const std::uint16_t* in, float* out, std::size_t n);
 
 // Reads an image in row strips as float, whatever its stored type.
 class ImageReader {

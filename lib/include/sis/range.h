@@ -75,7 +75,7 @@ struct RangeReport {
 
 // Reports on `image` against the local input range (which may be empty: then
 // out_of_range is not counted).
-RangeReport report_range(const Image& image, const LocalRange* local);
+RangeReport report_range(const Image& image, const LocalRange* local, int threads = 1);
 
 // Overshoot and undershoot of the displayed min-error approximation of a
 // unit step (0 left, 1 right, edge on a pixel boundary), computed exactly

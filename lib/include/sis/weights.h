@@ -24,6 +24,23 @@ struct AxisWeights {
   AxisWeights transposed() const;
 };
 
+// The table applied to one row of `channels` interleaved channels (sources
+// * channels values): out[t] = sum_e weight[e] in[index[e]] per channel, for
+// the targets [t0, t1). The sum over a target's entries is four interleaved
+// partial sums, p_j over the entries k = j mod 4 in increasing k, combined
+// as (p0 + p1) + (p2 + p3) (four chains the processor runs at once); every
+// path (vector or scalar, any channel count) keeps this order and gives the
+// same bits.
+void apply_weights(const AxisWeights& w, const double* in, int channels, long t0, long t1,
+                   double* out);
+
+// Rows weighted into sums, elementwise: sums[i][offset + k] += w[i] * x[k]
+// for i in [0, count), k in [0, n) (a product, then a sum, so the same bits
+// at any vector width); x is read once for up to four sums.
+template <typename T>
+void add_scaled_rows(double* const* sums, const double* w, int count, long offset, const T* x,
+                     long n);
+
 // Builds a table: for target t, the extended source indices k in
 // range(t) = [first, last] get weight(t, k); k is folded by the boundary rule.
 AxisWeights make_axis_weights(long targets, long sources, Boundary boundary,
