@@ -7,11 +7,14 @@
 #include <atomic>
 #include <chrono>
 #include <climits>
+#include <condition_variable>
+#include <exception>
+#include <functional>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <future>
+#include <mutex>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -106,6 +109,70 @@ class Progress {
   Clock::time_point start_;
   int last_ = -1;
   bool shown_ = false;
+};
+
+// Reads chunks 0, 1, ... in order on a thread of its own, up to `slots`
+// of them ahead of their use, into slot i mod slots.
+class ReadAhead {
+ public:
+  ReadAhead(std::size_t count, int slots, std::function<void(std::size_t, int)> read)
+      : count_(count), slots_(slots), read_(std::move(read)), thread_([this] { loop(); }) {}
+  ~ReadAhead() {
+    {
+      std::lock_guard<std::mutex> lock(m_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  // The slot of chunk i, once read; rethrows the error of a failed read.
+  int wait(std::size_t i) {
+    std::unique_lock<std::mutex> lock(m_);
+    cv_.wait(lock, [&] { return read_count_ > i || error_; });
+    if (read_count_ <= i) std::rethrow_exception(error_);
+    return int(i % slots_);
+  }
+  // Chunk i is used: its slot may be read into again.
+  void release(std::size_t i) {
+    {
+      std::lock_guard<std::mutex> lock(m_);
+      released_ = i + 1;
+    }
+    cv_.notify_all();
+  }
+
+ private:
+  void loop() {
+    for (std::size_t i = 0; i < count_; ++i) {
+      {
+        std::unique_lock<std::mutex> lock(m_);
+        cv_.wait(lock, [&] { return stop_ || i < released_ + slots_; });
+        if (stop_) return;
+      }
+      try {
+        read_(i, int(i % slots_));
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(m_);
+        error_ = std::current_exception();
+        cv_.notify_all();
+        return;
+      }
+      {
+        std::lock_guard<std::mutex> lock(m_);
+        read_count_ = i + 1;
+      }
+      cv_.notify_all();
+    }
+  }
+  const std::size_t count_;
+  const std::size_t slots_;
+  std::function<void(std::size_t, int)> read_;
+  std::mutex m_;
+  std::condition_variable cv_;
+  std::size_t read_count_ = 0, released_ = 0;
+  bool stop_ = false;
+  std::exception_ptr error_;
+  std::thread thread_;  // last: starts once the members above are ready
 };
 
 int run(const Options& o) {
@@ -328,14 +395,16 @@ int run(const Options& o) {
       }
       g += r->height();
     }
-    // Samples stored as half are read as they are and converted here, row by
-    // row on the worker threads (OpenImageIO's conversion is serial and
-    // slower than decoding). Two strip buffers: the next strip is decoded
-    // while this one is acquired.
+    // Samples stored as half are read as they are and converted here, piece
+    // by piece on the worker threads (OpenImageIO's conversion is serial and
+    // slower than decoding). Strips are read on a thread of their own, up to
+    // two ahead of the one being acquired, so that a strip that decodes
+    // slowly does not stall the acquisition.
     const std::size_t row_size = std::size_t(win) * C;
-    std::vector<std::uint16_t> half_rows[2];
-    std::vector<float> float_rows[2];
-    for (int b = 0; b < 2; ++b) {
+    const int slots = 3;
+    std::vector<std::vector<std::uint16_t>> half_rows(slots);
+    std::vector<std::vector<float>> float_rows(slots);
+    for (int b = 0; b < slots; ++b) {
       if (half) half_rows[b].resize(strip * row_size);
       if (!half || hex) float_rows[b].resize(strip * row_size);
     }
@@ -355,12 +424,11 @@ int run(const Options& o) {
         else
           ch.reader->read_rows(ch.y0, ch.y1, float_rows[b].data());
       };
-      std::future<void> next = std::async(std::launch::async, read, std::size_t(0), 0);
-      for (std::size_t i = 0, b = 0; i < chunks.size(); ++i, b ^= 1) {
+      ReadAhead ahead(chunks.size(), slots, read);
+      for (std::size_t i = 0; i < chunks.size(); ++i) {
         const Chunk& ch = chunks[i];
         const long y = ch.global, y1 = ch.global + ch.y1 - ch.y0;
-        next.get();  // rethrows a read error
-        if (i + 1 < chunks.size()) next = std::async(std::launch::async, read, i + 1, int(b ^ 1));
+        const int b = ahead.wait(i);  // rethrows a read error
         const long rows = y1 - y;
         for (long r = 0; r < rows; ++r) bad[r] = 0, bad_first[r] = LONG_MAX;
         // Values [k0, k1) of strip row r as float, in v: non-finite samples
@@ -415,10 +483,8 @@ int run(const Options& o) {
           }
           nonfinite += bad[r];
         }
-        if (nonfinite && o.nonfinite == "error") {
-          if (next.valid()) next.wait();
-          break;
-        }
+        ahead.release(i);
+        if (nonfinite && o.nonfinite == "error") break;
         progress.update(double(y1) / hin);
       }
       t_acquire = seconds_since(t);
