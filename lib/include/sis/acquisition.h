@@ -72,8 +72,9 @@ class Acquisition {
   // returns values [k0, k1) of input row y (W_in * channels values per
   // row), written into scratch (room for k1 - k0 floats) or held elsewhere.
   // The pieces of a row are disjoint and cover it; each is asked for once,
-  // on the worker threads, pieces of different rows and columns at once, so
-  // that per-row work (decoding, checks) runs in parallel with the sums.
+  // on the worker threads, pieces of different columns at once (the same
+  // columns in increasing row order), so that per-row work (decoding,
+  // checks) runs in parallel with the sums.
   using PieceSource = std::function<const float*(long y, long k0, long k1, float* scratch)>;
   void add_rows(long y0, long y1, const PieceSource& piece);
   long next_row() const { return next_row_; }
