@@ -73,15 +73,13 @@ LocalRange::LocalRange(long input_width, long input_height, int channels, long w
 }
 
 namespace {
-// out[k] = min(out[k], in[k]) (or max), elementwise: v < o ? v : o, which a
-// vector min computes too, so every clone gives the same values.
-__attribute__((target_clones("avx512f", "avx2", "default"))) void fold_min(float* __restrict out,
-                                                                const float* __restrict in, long n) {
-  for (long k = 0; k < n; ++k) out[k] = in[k] < out[k] ? in[k] : out[k];
-}
-__attribute__((target_clones("avx512f", "avx2", "default"))) void fold_max(float* __restrict out,
-                                                                const float* __restrict in, long n) {
-  for (long k = 0; k < n; ++k) out[k] = in[k] > out[k] ? in[k] : out[k];
+// out[k] = min(out[k], in[k]) (Min = false: max), elementwise: v < o ? v : o,
+// which a vector min computes too, so every clone gives the same values.
+template <bool Min>
+__attribute__((target_clones("avx512f", "avx2", "default"))) void fold_into(
+    float* __restrict out, const float* __restrict in, long n) {
+  for (long k = 0; k < n; ++k)
+    out[k] = Min ? (in[k] < out[k] ? in[k] : out[k]) : (in[k] > out[k] ? in[k] : out[k]);
 }
 
 // Min (Max = false: max) over the samples [xb[n], xe[n]) of one row into out.
@@ -180,8 +178,8 @@ void LocalRange::fold(long y, long k0, long k1, const float* values) {
       std::copy(values, values + (k1 - k0), t.lo + k0);
       std::copy(values, values + (k1 - k0), t.hi + k0);
     } else {
-      fold_min(t.lo + k0, values, k1 - k0);
-      fold_max(t.hi + k0, values, k1 - k0);
+      fold_into<true>(t.lo + k0, values, k1 - k0);
+      fold_into<false>(t.hi + k0, values, k1 - k0);
     }
   }
 }
