@@ -2,6 +2,7 @@
 
 #include <fftw3.h>
 
+#include <algorithm>
 #include <cmath>
 #include <mutex>
 #include <stdexcept>
@@ -21,6 +22,8 @@ std::mutex& fftw_planner_mutex() {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
+// Columns filtered together in the column pass: 8 doubles, one cache line.
+constexpr long kColumns = 8;
 }  // namespace
 
 FftwBuffer::FftwBuffer(long n) : data(fftw_alloc_real(std::max(1L, n))) {
@@ -28,30 +31,50 @@ FftwBuffer::FftwBuffer(long n) : data(fftw_alloc_real(std::max(1L, n))) {
 }
 FftwBuffer::~FftwBuffer() { fftw_free(data); }
 
+namespace {
+long pad(long n) { return (n + 7) / 8 * 8; }  // to 64 bytes of doubles
+}  // namespace
+
 PrefilterPlan1D::PrefilterPlan1D(int degree, long n, Boundary boundary, PrefilterMethod method)
     : degree_(degree), n_(n), boundary_(boundary), method_(method) {
   if (n < 1) throw std::invalid_argument("PrefilterPlan1D(): length " + std::to_string(n) + " < 1");
+  slot_.resize(n);
+  for (long k = 0; k < n; ++k) slot_[k] = k;
   if (method == PrefilterMethod::Recursive) {
     poles_ = bspline_prefilter_poles(degree);
     for (double z : poles_) gain_ *= (1 - z) * (1 - z);
     return;
   }
-  divisor_.resize(n);
-  if (boundary == Boundary::Mirror) {
-    for (long k = 0; k < n; ++k)
-      divisor_[k] = 2.0 * n * bspline_autocorrelation_spectrum(degree, kPi * k / n);
-  } else {
-    for (long k = 0; k < n; ++k)
-      divisor_[k] = double(n) * bspline_autocorrelation_spectrum(degree, 2 * kPi * std::min(k, n - k) / n);
+  // Bins k in [0, n/2] of the real DFT. The round trip r2c then c2r scales
+  // by n, which the divisors take out.
+  const long h = n / 2;
+  cos_.assign(h + 1, 1.0);
+  sin_.assign(h + 1, 0.0);
+  scale_re_.resize(h + 1);
+  scale_im_.resize(h + 1);
+  const bool mirror = boundary == Boundary::Mirror;
+  if (mirror)  // v = (x0, x2, x4, ..., x5, x3, x1)
+    for (long k = 0; k < n; ++k) slot_[k] = k % 2 ? n - 1 - k / 2 : k / 2;
+  for (long k = 0; k <= h; ++k) {
+    if (mirror) {
+      // The DCT-II bins k and n - k come from DFT bin k of the permuted
+      // sequence, turned by e^{-i pi k / 2n}: the real part is X[k], minus
+      // the imaginary part X[n - k]. Each is divided by its own A_d(pi k / n).
+      cos_[k] = std::cos(kPi * k / (2.0 * n));
+      sin_[k] = std::sin(kPi * k / (2.0 * n));
+      scale_re_[k] = 1.0 / (n * bspline_autocorrelation_spectrum(degree, kPi * k / n));
+      scale_im_[k] = k == 0 ? 0.0 : 1.0 / (n * bspline_autocorrelation_spectrum(degree, kPi * (n - k) / n));
+    } else {
+      scale_re_[k] = scale_im_[k] = 1.0 / (n * bspline_autocorrelation_spectrum(degree, 2 * kPi * k / n));
+    }
   }
-  FftwBuffer buf(n);
+  FftwBuffer buf(workspace_size());
+  double* real = buf.data;
+  auto* bins = reinterpret_cast<fftw_complex*>(buf.data + pad(n));
   std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
   const int len = static_cast<int>(n);
-  const bool mirror = boundary == Boundary::Mirror;
-  forward_ = fftw_plan_r2r_1d(len, buf.data, buf.data, mirror ? FFTW_REDFT10 : FFTW_R2HC,
-                              FFTW_ESTIMATE);
-  backward_ = fftw_plan_r2r_1d(len, buf.data, buf.data, mirror ? FFTW_REDFT01 : FFTW_HC2R,
-                               FFTW_ESTIMATE);
+  forward_ = fftw_plan_dft_r2c_1d(len, real, bins, FFTW_ESTIMATE);
+  backward_ = fftw_plan_dft_c2r_1d(len, bins, real, FFTW_ESTIMATE);
   if (!forward_ || !backward_) throw std::runtime_error("PrefilterPlan1D(): FFTW planning failed");
 }
 
@@ -62,17 +85,32 @@ PrefilterPlan1D::~PrefilterPlan1D() {
 }
 
 long PrefilterPlan1D::workspace_size() const {
-  return boundary_ == Boundary::Mirror ? 2 * n_ : n_;
+  if (method_ == PrefilterMethod::Recursive) return boundary_ == Boundary::Mirror ? 2 * n_ : n_;
+  return pad(n_) + pad(2 * (n_ / 2 + 1));  // the line, its DFT bins
 }
 
 void PrefilterPlan1D::execute(double* x, long stride, double* work) const {
+  for (long k = 0; k < n_; ++k) work[slot_[k]] = x[k * stride];
+  filter(work);
+  for (long k = 0; k < n_; ++k) x[k * stride] = work[slot_[k]];
+}
+
+void PrefilterPlan1D::filter(double* work) const {
   const long n = n_;
   if (method_ == PrefilterMethod::FFT) {
-    for (long k = 0; k < n; ++k) work[k] = x[k * stride];
-    fftw_execute_r2r(static_cast<fftw_plan>(forward_), work, work);
-    for (long k = 0; k < n; ++k) work[k] /= divisor_[k];
-    fftw_execute_r2r(static_cast<fftw_plan>(backward_), work, work);
-    for (long k = 0; k < n; ++k) x[k * stride] = work[k];
+    // Mirror: the DCT-II through a real DFT of the line in Makhoul's order
+    // (slot()), and back.
+    auto* bins = reinterpret_cast<fftw_complex*>(work + pad(n));
+    fftw_execute_dft_r2c(static_cast<fftw_plan>(forward_), work, bins);
+    for (long k = 0; k <= n / 2; ++k) {
+      const double c = cos_[k], s = sin_[k];
+      const double re = bins[k][0], im = bins[k][1];
+      const double a = (c * re + s * im) * scale_re_[k];  // e^{-i theta} V, each part scaled
+      const double b = (c * im - s * re) * scale_im_[k];
+      bins[k][0] = c * a - s * b;                         // turned back by e^{i theta}
+      bins[k][1] = c * b + s * a;
+    }
+    fftw_execute_dft_c2r(static_cast<fftw_plan>(backward_), bins, work);
     return;
   }
   // Recursive: one period of the extended sequence (2n for mirror, n for
@@ -80,8 +118,7 @@ void PrefilterPlan1D::execute(double* x, long stride, double* work) const {
   // periodic initial values y[0] = sum_k z^k e[-k] / (1 - z^P).
   const long P = workspace_size();
   double* e = work;
-  for (long k = 0; k < n; ++k) e[k] = x[k * stride];
-  for (long k = n; k < P; ++k) e[k] = x[(P - 1 - k) * stride];
+  for (long k = n; k < P; ++k) e[k] = e[P - 1 - k];
   for (const double z : poles_) {
     double s = 0, zk = 1;
     for (long k = 0; k < P && std::abs(zk) > 1e-30; ++k, zk *= z) s += zk * e[(P - k) % P];
@@ -93,7 +130,7 @@ void PrefilterPlan1D::execute(double* x, long stride, double* work) const {
     e[P - 1] = s / (1 - (std::abs(zk) > 1e-30 ? zk : 0.0));
     for (long k = P - 2; k >= 0; --k) e[k] += z * e[k + 1];
   }
-  for (long k = 0; k < n; ++k) x[k * stride] = gain_ * e[k];
+  for (long k = 0; k < n; ++k) e[k] *= gain_;
 }
 
 PrefilterPlan::PrefilterPlan(int degree, long nx, long ny, Boundary boundary,
@@ -110,9 +147,28 @@ void PrefilterPlan::execute(Grid<double>& r, int threads) const {
     for (long y = y0; y < y1; ++y)
       for (int c = 0; c < C; ++c) x_.execute(r.row(y) + c, C, work.data);
   });
-  parallel_for(W * C, threads, [&](long k0, long k1) {
-    FftwBuffer work(y_.workspace_size());
-    for (long k = k0; k < k1; ++k) y_.execute(r.data.data() + k, W * C, work.data);
+  // Columns in blocks of kColumns neighbours: a block's values in a row share
+  // a cache line, so each line of the grid is read and written once per
+  // pass rather than once per column. Each column's operations are those of
+  // execute(), so the bits do not depend on the blocking or the threads.
+  const long values = W * C, blocks = (values + kColumns - 1) / kColumns;
+  const long ws = (y_.workspace_size() + kColumns - 1) / kColumns * kColumns;  // keeps alignment
+  parallel_for(blocks, threads, [&](long b0, long b1) {
+    FftwBuffer work(kColumns * ws);
+    for (long b = b0; b < b1; ++b) {
+      const long k0 = b * kColumns, m = std::min(kColumns, values - k0);
+      for (long y = 0; y < H; ++y) {
+        const double* row = r.row(y) + k0;
+        const long at = y_.slot(y);
+        for (long j = 0; j < m; ++j) work.data[j * ws + at] = row[j];
+      }
+      for (long j = 0; j < m; ++j) y_.filter(work.data + j * ws);
+      for (long y = 0; y < H; ++y) {
+        double* row = r.row(y) + k0;
+        const long at = y_.slot(y);
+        for (long j = 0; j < m; ++j) row[j] = work.data[j * ws + at];
+      }
+    }
   });
 }
 

@@ -3,8 +3,11 @@
 // autocorrelation of the B-spline generator (DESIGN.md section 3). In 2-D the
 // spectrum factors, A(w1, w2) = A_d(w1) A_d(w2), so the prefilter runs as
 // 1-D passes along rows then columns.
-//   mirror:   DCT-II (FFTW REDFT10), divide by A_d(pi k / n), DCT-III (REDFT01), / 2n
-//   periodic: DFT (FFTW R2HC), divide by A_d(2 pi k / n), inverse (HC2R), / n
+//   mirror:   DCT-II, divide by A_d(pi k / n), DCT-III; each DCT of length n
+//             runs as one real DFT of length n (FFTW r2c / c2r, vectorised)
+//             of the permuted sequence (x0, x2, x4, ..., x3, x1), turned by
+//             e^{-+ i pi k / 2n} (Makhoul's algorithm)
+//   periodic: real DFT (FFTW r2c), divide by A_d(2 pi k / n), inverse (c2r)
 // The recursive form runs the causal/anti-causal pole pairs of 1/A_d on the
 // boundary-extended sequence, exactly (periodic initial conditions).
 #include <memory>
@@ -26,8 +29,14 @@ class PrefilterPlan1D {
 
   long size() const { return n_; }
   // Filters x[0], x[stride], ..., x[(n-1) stride] in place. work must hold
-  // workspace_size() doubles, allocated with allocate_workspace().
+  // workspace_size() doubles, FFTW-aligned (FftwBuffer).
   void execute(double* x, long stride, double* work) const;
+  // The position of sample k of a line in the workspace: the order the
+  // transform takes (Makhoul's permutation for the mirror FFT, else k).
+  long slot(long k) const { return slot_[k]; }
+  // Filters in place the line held in work, sample k at slot(k) (the rest
+  // of the workspace is scratch); work is aligned as an FftwBuffer's start.
+  void filter(double* work) const;
   long workspace_size() const;
 
  private:
@@ -37,7 +46,10 @@ class PrefilterPlan1D {
   PrefilterMethod method_;
   void* forward_ = nullptr;   // fftw_plan
   void* backward_ = nullptr;  // fftw_plan
-  std::vector<double> divisor_;  // spectrum times the transform pair's scale
+  // per real-DFT bin k in [0, n/2]: the turn e^{-i pi k / 2n} (mirror) and
+  // the factors 1 / (n A_d) of its real and imaginary parts
+  std::vector<double> cos_, sin_, scale_re_, scale_im_;
+  std::vector<long> slot_;
   std::vector<double> poles_;
   double gain_ = 1.0;
 };
