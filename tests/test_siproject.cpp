@@ -89,6 +89,52 @@ TEST_F(Siproject, HalfSamplesConvertAsOpenImageIOConvertsThem) {
   EXPECT_THROW(f.read_rows_half(0, 4, stored.data()), std::logic_error);
 }
 
+TEST_F(Siproject, FloatsConvertToHalfAsOpenImageIOConvertsThem) {
+  // Every finite half value, the midpoints between neighbours (ties, which
+  // round to the even one) and a float step either side of each, values past
+  // half's largest (65504; ties from 65520 go to infinity), below its
+  // smallest subnormal, zeros, infinities and NaN: float_to_half against
+  // OpenImageIO's conversion when it writes floats to a half file.
+  std::vector<float> v;
+  for (std::uint32_t h = 0; h < 0x7c00; ++h) {
+    const std::uint16_t pair[2] = {std::uint16_t(h), std::uint16_t(h + 1)};
+    float ab[2];
+    half_to_float(pair, ab, 2);  // exact (the test above)
+    const float a = ab[0], b = ab[1];
+    const float mid = a + (b - a) / 2;  // exact: one bit more than half's mantissa
+    for (float x : {a, mid, std::nextafter(mid, 0.0f), std::nextafter(mid, INFINITY)}) {
+      v.push_back(x);
+      v.push_back(-x);
+    }
+  }
+  for (float x : {65519.0f, 65520.0f, 1e10f, 1e-9f, 2.9e-8f, 3.0e-8f, 0.0f, INFINITY, NAN})
+    v.push_back(x), v.push_back(-x);
+  const long w = 1024, h = long(v.size() + w - 1) / w;
+  v.resize(w * h, 0.5f);
+  OIIO::ImageSpec spec(int(w), int(h), 1, OIIO::TypeDesc::HALF);
+  auto out = OIIO::ImageOutput::create(path("h.exr"));
+  ASSERT_TRUE(out && out->open(path("h.exr"), spec) &&
+              out->write_image(OIIO::TypeDesc::FLOAT, v.data()) && out->close());
+  ImageReader r(path("h.exr"));
+  std::vector<std::uint16_t> theirs(v.size()), ours(v.size());
+  r.read_rows_half(0, h, theirs.data());
+  float_to_half(v.data(), ours.data(), v.size() - 3);  // a length that is not a whole vector
+  float_to_half(v.data() + v.size() - 3, ours.data() + v.size() - 3, 3);
+  long nan = 0;
+  for (std::size_t q = 0; q < v.size(); ++q) {
+    if (std::isnan(v[q])) {  // any NaN pattern, as OpenImageIO's
+      EXPECT_EQ(ours[q] & 0x7c00, 0x7c00) << q;
+      EXPECT_NE(ours[q] & 0x03ff, 0) << q;
+      ++nan;
+      continue;
+    }
+    EXPECT_EQ(ours[q], theirs[q]) << "float " << v[q];
+  }
+  EXPECT_EQ(nan, 2);
+  EXPECT_EQ(ours[std::find(v.begin(), v.end(), 65520.0f) - v.begin()], 0x7c00);  // +Inf
+  EXPECT_EQ(ours[std::find(v.begin(), v.end(), 65519.0f) - v.begin()], 0x7bff);  // 65504
+}
+
 TEST_F(Siproject, AgreesWithTheLibrary) {
   const Image in = random_image(64, 48, 3, 1);
   write_image(path("in.exr"), in);

@@ -163,6 +163,27 @@ __attribute__((target("avx,f16c"))) bool half_to_float_f16c(const std::uint16_t*
 }  // namespace
 #endif
 
+#if defined(__x86_64__)
+namespace {
+__attribute__((target("avx,f16c"))) void float_to_half_f16c(const float* in, std::uint16_t* out,
+                                                          std::size_t n) {
+  std::size_t q = 0;
+  for (; q + 8 <= n; q += 8)
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + q),
+                     _mm256_cvtps_ph(_mm256_loadu_ps(in + q), _MM_FROUND_TO_NEAREST_INT));
+  for (; q < n; ++q) out[q] = _cvtss_sh(in[q], _MM_FROUND_TO_NEAREST_INT);
+}
+}  // namespace
+#endif
+
+void float_to_half(const float* in, std::uint16_t* out, std::size_t n) {
+#if defined(__x86_64__)
+  static const bool f16c = __builtin_cpu_supports("f16c") && __builtin_cpu_supports("avx");
+  if (f16c) return float_to_half_f16c(in, out, n);
+#endif
+  for (std::size_t q = 0; q < n; ++q) out[q] = imath_float_to_half(in[q]);
+}
+
 bool half_to_float(const std::uint16_t* in, float* out, std::size_t n) {
 #if defined(__x86_64__)
   static const bool f16c = __builtin_cpu_supports("f16c") && __builtin_cpu_supports("avx");
@@ -242,6 +263,12 @@ void write_image(const std::string& path, const Image& image,
   if (int(channel_names.size()) == image.channels) spec.channelnames = channel_names;
   if (alpha_channel >= 0 && alpha_channel < image.channels) spec.alpha_channel = alpha_channel;
   for (const auto& [k, v] : metadata) spec.attribute(k, v);
+  if (stored == TypeDesc::HALF) {  // converted here: OpenImageIO's conversion is serial and slower
+    std::vector<std::uint16_t> half(image.data.size());
+    float_to_half(image.data.data(), half.data(), half.size());
+    write_atomically(path, spec, TypeDesc::HALF, half.data());
+    return;
+  }
   if (!eight) {
     write_atomically(path, spec, TypeDesc::FLOAT, image.data.data());
     return;

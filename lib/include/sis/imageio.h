@@ -34,6 +34,10 @@ std::string sample_format_name(SampleFormat f);
 // the processor's F16C conversion where it has one. Returns whether every
 // value was finite (a check on the half bits, in the same pass).
 bool half_to_float(const std::uint16_t* in, float* out, std::size_t n);
+// Float to IEEE half bits, rounded to nearest even as OpenImageIO's (Imath's)
+// conversion rounds (beyond half's range: infinity); with F16C where the
+// processor has it. Half outputs are converted here, not in the writer.
+void float_to_half(const float* in, std::uint16_t* out, std::size_t n);
 
 // Reads an image in row strips as float, whatever its stored type.
 class ImageReader {
