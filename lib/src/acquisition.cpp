@@ -136,25 +136,27 @@ void Acquisition::add(long y0, long y1, const Piece& piece) {
     acc_ = Grid<double>(plan_.coefficients_x(), plan_.coefficients_y(), plan_.channels());
 
   // The coefficient rows each input row adds to (their vertical sums and
-  // weights); rows summed to the end here are filtered in the next call.
-  std::vector<std::vector<double*>> row_sums(y1 - y0);
-  std::vector<std::vector<double>> row_weights(y1 - y0);
+  // weights), and those it starts (its term is their first: assigned, not
+  // added, so the sums need no zeroing); rows summed to the end here are
+  // filtered in the next call.
+  std::vector<std::vector<double*>> row_sums(y1 - y0), row_starts(y1 - y0);
+  std::vector<std::vector<double>> row_weights(y1 - y0), row_start_weights(y1 - y0);
   std::vector<long> completed;
   for (long n = 0; n < plan_.coefficients_y(); ++n) {
     long e = cursor_[n];
     if (e == wy.end(n) || wy.index[e] >= y1) continue;
     if (sums_[n].empty()) {
       if (spare_.empty()) {
-        sums_[n].assign(values + 64 / sizeof(double), 0.0);
+        sums_[n].resize(values + 64 / sizeof(double));
       } else {
         sums_[n] = std::move(spare_.back());
         spare_.pop_back();
-        std::fill(sums_[n].begin(), sums_[n].end(), 0.0);
       }
     }
     for (; e < wy.end(n) && wy.index[e] < y1; ++e) {
-      row_sums[wy.index[e] - y0].push_back(sums_of(n));
-      row_weights[wy.index[e] - y0].push_back(wy.weight[e]);
+      const bool start = e == wy.begin(n);
+      (start ? row_starts : row_sums)[wy.index[e] - y0].push_back(sums_of(n));
+      (start ? row_start_weights : row_weights)[wy.index[e] - y0].push_back(wy.weight[e]);
     }
     cursor_[n] = e;
     if (e == wy.end(n)) completed.push_back(n);
@@ -176,6 +178,8 @@ void Acquisition::add(long y0, long y1, const Piece& piece) {
         const long len = std::min(k1, b + kBlock) - b;
         for (long r = 0; r < y1 - y0; ++r) {
           const T* x = piece(y0 + r, b, b + len, scratch);
+          add_scaled_rows(row_starts[r].data(), row_start_weights[r].data(),
+                          int(row_starts[r].size()), b, x, len, true);
           add_scaled_rows(row_sums[r].data(), row_weights[r].data(), int(row_sums[r].size()), b, x, len);
         }
       }

@@ -106,11 +106,11 @@ void apply_separable(const Grid<double>& c, const AxisWeights& wx, const AxisWei
   parallel_for(acc.height, threads, [&](long j0, long j1) {
     std::vector<double> tmp(c.row_size()), row(std::size_t(acc.width) * C);
     for (long j = j0; j < j1; ++j) {
-      std::fill(tmp.begin(), tmp.end(), 0.0);
-      for (long e = wy.begin(j); e < wy.end(j); ++e) {
-        double* sums = tmp.data();
-        add_scaled_rows(&sums, &wy.weight[e], 1, 0, c.row(wy.index[e]), long(tmp.size()));
-      }
+      double* sums = tmp.data();
+      if (wy.begin(j) == wy.end(j)) std::fill(tmp.begin(), tmp.end(), 0.0);
+      for (long e = wy.begin(j); e < wy.end(j); ++e)  // the first term assigned: no zeroing
+        add_scaled_rows(&sums, &wy.weight[e], 1, 0, c.row(wy.index[e]), long(tmp.size()),
+                        e == wy.begin(j));
       apply_weights(wx, tmp.data(), C, 0, acc.width, row.data());
       T* out = acc.row(j);
       for (std::size_t q = 0; q < row.size(); ++q) out[q] = static_cast<T>(out[q] + scale * row[q]);

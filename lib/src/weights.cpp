@@ -109,10 +109,10 @@ bool has_avx() {
 }
 #endif
 
-// sums[t][k] += w[t] * x[k] for N rows t at once, x read once: elementwise,
-// a product then a sum, so the same bits at any vector width, which the
-// clones choose by the processor.
-template <int N, typename T>
+// sums[t][k] += w[t] * x[k] (Assign: =) for N rows t at once, x read once:
+// elementwise, a product then a sum, so the same bits at any vector width,
+// which the clones choose by the processor.
+template <int N, bool Assign, typename T>
 __attribute__((target_clones("avx512f", "avx2", "default"))) void add_scaled(
     double* const* sums, const double* w, const T* __restrict x, long n) {
   static_assert(N >= 1 && N <= 4);
@@ -123,10 +123,25 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) void add_scaled(
   const double w0 = w[0], w1 = N > 1 ? w[1] : 0, w2 = N > 2 ? w[2] : 0, w3 = N > 3 ? w[3] : 0;
   for (long k = 0; k < n; ++k) {
     const double v = x[k];
-    s0[k] += w0 * v;
-    if constexpr (N > 1) s1[k] += w1 * v;
-    if constexpr (N > 2) s2[k] += w2 * v;
-    if constexpr (N > 3) s3[k] += w3 * v;
+    s0[k] = (Assign ? 0.0 : s0[k]) + w0 * v;
+    if constexpr (N > 1) s1[k] = (Assign ? 0.0 : s1[k]) + w1 * v;
+    if constexpr (N > 2) s2[k] = (Assign ? 0.0 : s2[k]) + w2 * v;
+    if constexpr (N > 3) s3[k] = (Assign ? 0.0 : s3[k]) + w3 * v;
+  }
+}
+
+template <bool Assign, typename T>
+void scaled_rows(double* const* sums, const double* w, int count, long offset, const T* x, long n) {
+  for (int t = 0; t < count; t += 4) {
+    double* s[4];
+    const int m = std::min(4, count - t);
+    for (int i = 0; i < m; ++i) s[i] = sums[t + i] + offset;
+    switch (m) {
+      case 1: add_scaled<1, Assign>(s, w + t, x, n); break;
+      case 2: add_scaled<2, Assign>(s, w + t, x, n); break;
+      case 3: add_scaled<3, Assign>(s, w + t, x, n); break;
+      default: add_scaled<4, Assign>(s, w + t, x, n); break;
+    }
   }
 }
 
@@ -161,21 +176,14 @@ void apply_weights(const AxisWeights& w, const double* in, int channels, long t0
 
 template <typename T>
 void add_scaled_rows(double* const* sums, const double* w, int count, long offset, const T* x,
-                     long n) {
-  for (int t = 0; t < count; t += 4) {
-    double* s[4];
-    const int m = std::min(4, count - t);
-    for (int i = 0; i < m; ++i) s[i] = sums[t + i] + offset;
-    switch (m) {
-      case 1: add_scaled<1>(s, w + t, x, n); break;
-      case 2: add_scaled<2>(s, w + t, x, n); break;
-      case 3: add_scaled<3>(s, w + t, x, n); break;
-      default: add_scaled<4>(s, w + t, x, n); break;
-    }
-  }
+                     long n, bool assign) {
+  if (assign)
+    scaled_rows<true>(sums, w, count, offset, x, n);
+  else
+    scaled_rows<false>(sums, w, count, offset, x, n);
 }
-template void add_scaled_rows(double* const*, const double*, int, long, const float*, long);
-template void add_scaled_rows(double* const*, const double*, int, long, const double*, long);
+template void add_scaled_rows(double* const*, const double*, int, long, const float*, long, bool);
+template void add_scaled_rows(double* const*, const double*, int, long, const double*, long, bool);
 
 AxisWeights make_axis_weights(long targets, long sources, Boundary boundary,
                               const std::function<std::pair<long, long>(long)>& range,
