@@ -506,7 +506,9 @@ int run(const Options& o) {
     t_prefilter = seconds_since(t);
     // Coefficients are kept in float, as a coefficient file stores them, so
     // that evaluating a written coefficient file reproduces this run exactly.
-    for (double& v : k.c.data) v = static_cast<float>(v);
+    parallel_for(long(k.c.data.size()), threads, [&](long q0, long q1) {
+      for (long q = q0; q < q1; ++q) k.c.data[q] = static_cast<float>(k.c.data[q]);
+    });
   }
 
   const Display shown = display ? *display : (k.min_error ? Display::antialiased_2x2() : Display::centred());
