@@ -386,6 +386,10 @@ def build_rows(competitors, big):
             "wall_max_s": max(c["walls"]),
             "ratio_decode": wall / floor if same_input else (wall / c["floor"] if c.get("floor") else None),
             "ratio_oiio_bspline": wall / bspline if same_input else None,
+            # per round against the floor's run in the same round (which
+            # shares that round's load), for reading the ratio through noise
+            "paired_decode": ([w / f for w, f in zip(c["walls"], by_name[DECODE]["walls"])]
+                              if same_input else []),
             "peak_rss_mb": max(c["rss"]),
             "cpu_median_s": statistics.median(c["cpu"]),
             "stages": median_stages(c),
@@ -515,7 +519,9 @@ def targets(rows, threads, micro):
         (head["ratio_oiio_bspline"] <= TARGET_RATIO_OIIO,
          f"{HEADLINE} <= {TARGET_RATIO_OIIO}x oiiotool bspline time: {head['ratio_oiio_bspline']:.2f}x"),
         (head["ratio_decode"] <= TARGET_RATIO_DECODE,
-         f"{HEADLINE} <= {TARGET_RATIO_DECODE}x the decode floor: {head['ratio_decode']:.2f}x"),
+         f"{HEADLINE} <= {TARGET_RATIO_DECODE}x the decode floor: {head['ratio_decode']:.2f}x "
+         f"(median over the rounds of each round's ratio: {statistics.median(head['paired_decode']):.2f}x, "
+         f"{min(head['paired_decode']):.2f}-{max(head['paired_decode']):.2f}; judged on the ratio of the medians)"),
         (head["peak_rss_mb"] <= TARGET_PEAK_MB,
          f"{HEADLINE} peak memory <= {TARGET_PEAK_MB} MB at {head['input']}: {head['peak_rss_mb']:.0f} MB"),
     ]
