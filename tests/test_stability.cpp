@@ -228,6 +228,17 @@ TEST(Stability, RangeReportEqualsADirectCount) {
     EXPECT_EQ(r.samples, long(img.data.size())) << threads;
     EXPECT_EQ(report_range(img, nullptr, threads).out_of_range, 0) << threads;
   }
+  // A zero minimum met as -0 in one lane and +0 in another: reported as +0
+  // at any thread count.
+  Image z(W, H, C);
+  std::fill(z.data.begin(), z.data.end(), 0.5f);
+  z.data[1] = -0.0f;
+  z.data[z.data.size() / 2 + 7] = 0.0f;
+  for (int threads : {1, 2, 3}) {
+    const RangeReport r = report_range(z, nullptr, threads);
+    EXPECT_EQ(r.min, 0.0) << threads;
+    EXPECT_FALSE(std::signbit(r.min)) << threads;
+  }
 }
 
 TEST(Numerics, PrefilterErrorStaysNearRoundingForEveryDegree) {

@@ -137,8 +137,8 @@ void Acquisition::add(long y0, long y1, const Piece& piece) {
 
   // The coefficient rows each input row adds to (their vertical sums and
   // weights), and those it starts (its term is their first: assigned, not
-  // added, so the sums need no zeroing); rows summed to the end here are
-  // filtered in the next call.
+  // added, so reused sum buffers need no zeroing); rows summed to the end
+  // here are filtered in the next call.
   std::vector<std::vector<double*>> row_sums(y1 - y0), row_starts(y1 - y0);
   std::vector<std::vector<double>> row_weights(y1 - y0), row_start_weights(y1 - y0);
   std::vector<long> completed;

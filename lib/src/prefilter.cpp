@@ -22,7 +22,8 @@ std::mutex& fftw_planner_mutex() {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
-// Columns filtered together in the column pass: 8 doubles, one cache line.
+// Columns filtered together in the column pass: 8 neighbouring doubles of a
+// row, 64 bytes (one or two cache lines).
 constexpr long kColumns = 8;
 }  // namespace
 
@@ -59,7 +60,8 @@ PrefilterPlan1D::PrefilterPlan1D(int degree, long n, Boundary boundary, Prefilte
     if (mirror) {
       // The DCT-II bins k and n - k come from DFT bin k of the permuted
       // sequence, turned by e^{-i pi k / 2n}: the real part is X[k], minus
-      // the imaginary part X[n - k]. Each is divided by its own A_d(pi k / n).
+      // the imaginary part X[n - k]; X[k] is divided by A_d(pi k / n) and
+      // X[n - k] by A_d(pi (n - k) / n).
       cos_[k] = std::cos(kPi * k / (2.0 * n));
       sin_[k] = std::sin(kPi * k / (2.0 * n));
       scale_re_[k] = 1.0 / (n * bspline_autocorrelation_spectrum(degree, kPi * k / n));
@@ -147,8 +149,8 @@ void PrefilterPlan::execute(Grid<double>& r, int threads) const {
     for (long y = y0; y < y1; ++y)
       for (int c = 0; c < C; ++c) x_.execute(r.row(y) + c, C, work.data);
   });
-  // Columns in blocks of kColumns neighbours: a block's values in a row share
-  // a cache line, so each line of the grid is read and written once per
+  // Columns in blocks of kColumns neighbours: a block's values in a row are
+  // contiguous, so each cache line of the grid is fetched about once per
   // pass rather than once per column. Each column's operations are those of
   // execute(), so the bits do not depend on the blocking or the threads.
   const long values = W * C, blocks = (values + kColumns - 1) / kColumns;

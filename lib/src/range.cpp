@@ -210,7 +210,8 @@ void LocalRange::add_rows(long y0, long y1, const float* rows) {
 namespace {
 // The report's sums over values [0, n): kLanes independent lanes updated
 // elementwise (so they run on whole vectors), combined at the end. Min and
-// max are exact in any order; v < a ? v : a skips NaN as std::min does.
+// max are exact in any order but for the sign of a zero, which the report
+// drops; v < a ? v : a skips NaN as std::min does.
 constexpr int kLanes = 16;
 struct Lanes {
   float min[kLanes], max[kLanes];
@@ -289,6 +290,9 @@ RangeReport report_range(const Image& image, const LocalRange* local, int thread
     r.negative += part[p].negative;
     r.out_of_range += part[p].out_of_range;
   }
+  // a zero extreme as +0 whatever the lanes and parts met first (-0 == +0)
+  if (r.min == 0) r.min = 0.0;
+  if (r.max == 0) r.max = 0.0;
   r.samples = n;
   return r;
 }

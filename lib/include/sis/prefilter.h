@@ -4,7 +4,7 @@
 // spectrum factors, A(w1, w2) = A_d(w1) A_d(w2), so the prefilter runs as
 // 1-D passes along rows then columns.
 //   mirror:   DCT-II, divide by A_d(pi k / n), DCT-III; each DCT of length n
-//             runs as one real DFT of length n (FFTW r2c / c2r, vectorised)
+//             runs as one real DFT of length n (FFTW r2c / c2r, SIMD codelets)
 //             of the permuted sequence (x0, x2, x4, ..., x3, x1), turned by
 //             e^{-+ i pi k / 2n} (Makhoul's algorithm)
 //   periodic: real DFT (FFTW r2c), divide by A_d(2 pi k / n), inverse (c2r)

@@ -37,8 +37,8 @@ void apply_weights(const AxisWeights& w, const double* in, int channels, long t0
 // Rows weighted into sums, elementwise: sums[i][offset + k] += w[i] * x[k]
 // for i in [0, count), k in [0, n) (a product, then a sum, so the same bits
 // at any vector width); x is read once for up to four sums. With assign, the
-// sums' first terms: sums[i][offset + k] = w[i] * x[k], the bits of adding
-// them to zeros, without the zeroing.
+// sums' first terms: sums[i][offset + k] = 0.0 + w[i] * x[k], the bits of
+// adding them to zeros, without reading the sums.
 template <typename T>
 void add_scaled_rows(double* const* sums, const double* w, int count, long offset, const T* x,
                      long n, bool assign = false);
