@@ -143,6 +143,11 @@ constexpr std::uint16_t kHalfExponent = 0x7c00;
 
 #if defined(__x86_64__)
 namespace {
+bool has_f16c() {
+  static const bool f16c = __builtin_cpu_supports("f16c") && __builtin_cpu_supports("avx");
+  return f16c;
+}
+
 __attribute__((target("avx,f16c"))) bool half_to_float_f16c(const std::uint16_t* in, float* out,
                                                            std::size_t n) {
   const __m128i exponent = _mm_set1_epi16(std::int16_t(kHalfExponent));
@@ -160,11 +165,7 @@ __attribute__((target("avx,f16c"))) bool half_to_float_f16c(const std::uint16_t*
   }
   return finite;
 }
-}  // namespace
-#endif
 
-#if defined(__x86_64__)
-namespace {
 __attribute__((target("avx,f16c"))) void float_to_half_f16c(const float* in, std::uint16_t* out,
                                                           std::size_t n) {
   std::size_t q = 0;
@@ -178,16 +179,14 @@ __attribute__((target("avx,f16c"))) void float_to_half_f16c(const float* in, std
 
 void float_to_half(const float* in, std::uint16_t* out, std::size_t n) {
 #if defined(__x86_64__)
-  static const bool f16c = __builtin_cpu_supports("f16c") && __builtin_cpu_supports("avx");
-  if (f16c) return float_to_half_f16c(in, out, n);
+  if (has_f16c()) return float_to_half_f16c(in, out, n);
 #endif
   for (std::size_t q = 0; q < n; ++q) out[q] = imath_float_to_half(in[q]);
 }
 
 bool half_to_float(const std::uint16_t* in, float* out, std::size_t n) {
 #if defined(__x86_64__)
-  static const bool f16c = __builtin_cpu_supports("f16c") && __builtin_cpu_supports("avx");
-  if (f16c) return half_to_float_f16c(in, out, n);
+  if (has_f16c()) return half_to_float_f16c(in, out, n);
 #endif
   bool finite = true;
   for (std::size_t q = 0; q < n; ++q) {

@@ -215,27 +215,37 @@ namespace {
 constexpr int kLanes = 16;
 struct Lanes {
   float min[kLanes], max[kLanes];
-  std::int32_t negative[kLanes], out[kLanes];
+  std::int32_t negative[kLanes] = {}, out[kLanes] = {};
+  Lanes() {
+    std::fill(min, min + kLanes, std::numeric_limits<float>::infinity());
+    std::fill(max, max + kLanes, -std::numeric_limits<float>::infinity());
+  }
 };
 
+// Sample x, with the local range [a, b] under it (Local), into lane j.
+template <bool Local>
+inline void take(Lanes& l, int j, float x, float a, float b) {
+  l.min[j] = x < l.min[j] ? x : l.min[j];
+  l.max[j] = x > l.max[j] ? x : l.max[j];
+  l.negative[j] += x < 0.0f;
+  if constexpr (Local) {
+    // float rounding of the projection chain is about 1e-6 relative:
+    // departures below 1e-5 of the local scale do not count
+    const float scale = std::max(1.0f, std::max(a < 0 ? -a : a, b < 0 ? -b : b));
+    const float tol = 1e-5f * scale;
+    l.out[j] += (x < a - tol) | (x > b + tol);
+  }
+}
+
+// Values [0, n) into the lanes: whole blocks lane by lane, the tail in lane 0.
 template <bool Local>
 __attribute__((target_clones("avx512f", "avx2", "default"))) void report_lanes(
     const float* v, const float* lo, const float* hi, long n, Lanes& l) {
-  for (long k = 0; k + kLanes <= n; k += kLanes)
-    for (int j = 0; j < kLanes; ++j) {
-      const float x = v[k + j];
-      l.min[j] = x < l.min[j] ? x : l.min[j];
-      l.max[j] = x > l.max[j] ? x : l.max[j];
-      l.negative[j] += x < 0.0f;
-      if constexpr (Local) {
-        // float rounding of the projection chain is about 1e-6 relative:
-        // departures below 1e-5 of the local scale do not count
-        const float a = lo[k + j], b = hi[k + j];
-        const float scale = std::max(1.0f, std::max(a < 0 ? -a : a, b < 0 ? -b : b));
-        const float tol = 1e-5f * scale;
-        l.out[j] += (x < a - tol) | (x > b + tol);
-      }
-    }
+  long k = 0;
+  for (; k + kLanes <= n; k += kLanes)
+    for (int j = 0; j < kLanes; ++j)
+      take<Local>(l, j, v[k + j], Local ? lo[k + j] : 0.0f, Local ? hi[k + j] : 0.0f);
+  for (; k < n; ++k) take<Local>(l, 0, v[k], Local ? lo[k] : 0.0f, Local ? hi[k] : 0.0f);
 }
 }  // namespace
 
@@ -245,6 +255,7 @@ RangeReport report_range(const Image& image, const LocalRange* local, int thread
   const long blocks = n / kLanes;
   const long parts = std::max({1L, std::min<long>(threads, blocks / 4096), blocks * kLanes >> 30});
   std::vector<RangeReport> part(parts);
+  const float* v = image.data.data();
   const float* lo = local ? local->min().data.data() : nullptr;
   const float* hi = local ? local->max().data.data() : nullptr;
   parallel_for(parts, threads, [&](long p0, long p1) {
@@ -252,11 +263,6 @@ RangeReport report_range(const Image& image, const LocalRange* local, int thread
       const long q0 = blocks * p / parts * kLanes;
       const long q1 = p + 1 == parts ? n : blocks * (p + 1) / parts * kLanes;
       Lanes l;
-      std::fill(l.min, l.min + kLanes, std::numeric_limits<float>::infinity());
-      std::fill(l.max, l.max + kLanes, -std::numeric_limits<float>::infinity());
-      std::fill(l.negative, l.negative + kLanes, 0);
-      std::fill(l.out, l.out + kLanes, 0);
-      const float* v = image.data.data();
       if (local)
         report_lanes<true>(v + q0, lo + q0, hi + q0, q1 - q0, l);
       else
@@ -269,17 +275,6 @@ RangeReport report_range(const Image& image, const LocalRange* local, int thread
         r.max = std::max<double>(r.max, l.max[j]);
         r.negative += l.negative[j];
         r.out_of_range += l.out[j];
-      }
-      for (long q = q0 + (q1 - q0) / kLanes * kLanes; q < q1; ++q) {  // the tail
-        const float x = v[q];
-        r.min = std::min<double>(r.min, x);
-        r.max = std::max<double>(r.max, x);
-        r.negative += x < 0;
-        if (local) {
-          const float scale = std::max({1.0f, std::abs(lo[q]), std::abs(hi[q])});
-          const float tol = 1e-5f * scale;
-          r.out_of_range += x < lo[q] - tol || x > hi[q] + tol;
-        }
       }
     }
   });
