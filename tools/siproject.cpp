@@ -22,6 +22,7 @@
 
 #include "sis/hex_projection.h"
 #include "sis/imageio.h"
+#include "sis/prefetch.h"
 #include "sis/projection.h"
 #include "sis/range.h"
 
@@ -467,6 +468,16 @@ int run(const Options& o) {
         } else {
           cartesian->add_rows(y, y1, [&](long gy, long k0, long k1, float* scratch) {
             const long r = gy - y;
+            // the block a later call will ask for
+            const std::size_t n = std::size_t(k1 - k0), size = half ? sizeof(std::uint16_t) : sizeof(float);
+            const long ahead = r + prefetch_rows(n * size);
+            if (ahead < rows) {
+              const std::size_t at = ahead * row_size + k0;
+              if (half)
+                prefetch(half_rows[b].data() + at, n * size);
+              else
+                prefetch(float_rows[b].data() + at, n * size);
+            }
             float* v = half ? scratch : float_rows[b].data() + r * row_size + k0;
             check(r, k0, k1, v);
             finish(r, k0, k1, v);

@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sis/prefetch.h"
 
 namespace sis {
 
@@ -59,6 +60,18 @@ T* aligned(T* p) {
   return reinterpret_cast<T*>((reinterpret_cast<std::uintptr_t>(p) + 63) & ~std::uintptr_t(63));
 }
 
+// Rows held in memory: each piece is where it lies; the same columns a few
+// rows on are prefetched.
+template <typename T>
+auto in_memory(long y0, long y1, const T* rows, std::size_t row_size) {
+  return [=](long y, long k0, long k1, T*) {
+    const std::size_t bytes = std::size_t(k1 - k0) * sizeof(T);
+    const long ahead = y + prefetch_rows(bytes);
+    if (ahead < y1) prefetch(rows + (ahead - y0) * row_size + k0, bytes);
+    return rows + (y - y0) * row_size + k0;
+  };
+}
+
 }  // namespace
 
 AcquisitionPlan::AcquisitionPlan(long input_width, long input_height, int channels,
@@ -97,11 +110,11 @@ Acquisition::Acquisition(const AcquisitionPlan& plan, int threads)
 
 void Acquisition::add_rows(long y0, long y1, const float* rows) {
   const std::size_t row_size = std::size_t(plan_.input_width()) * plan_.channels();
-  add<float>(y0, y1, [&](long y, long k0, long, float*) { return rows + (y - y0) * row_size + k0; });
+  add<float>(y0, y1, in_memory(y0, y1, rows, row_size));
 }
 void Acquisition::add_rows(long y0, long y1, const double* rows) {
   const std::size_t row_size = std::size_t(plan_.input_width()) * plan_.channels();
-  add<double>(y0, y1, [&](long y, long k0, long, double*) { return rows + (y - y0) * row_size + k0; });
+  add<double>(y0, y1, in_memory(y0, y1, rows, row_size));
 }
 void Acquisition::add_rows(long y0, long y1, const PieceSource& piece) { add<float>(y0, y1, piece); }
 

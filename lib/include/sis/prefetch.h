@@ -1,0 +1,29 @@
+#pragma once
+// Software prefetch for the row-streaming stages. They walk the rows of a
+// strip a block of columns at a time: each row's block is a short run of
+// cache lines far from the last (a row apart), which the hardware
+// prefetchers do not foresee, so each block would start with misses to the
+// outer caches. The stages ask for a later row's block while they work on
+// this one.
+#include <algorithm>
+#include <cstddef>
+
+namespace sis {
+
+// How far ahead, in rows, for blocks of `bytes` bytes: about 2 KB of lines
+// in flight. (Measured on BM_Acquisition, float rows in 2 KB blocks: one row
+// ahead 44 ms, two 61 ms, none 73 ms; in siproject, half rows in 1 KB
+// blocks: two rows ahead beat one.)
+inline long prefetch_rows(std::size_t bytes) {
+  return std::max(1L, long(2048 / std::max<std::size_t>(bytes, 1)));
+}
+
+// Asks for the cache lines of [p, p + bytes) to be brought into the
+// first-level cache. Only a hint: no effect on results, and no fault on any
+// address.
+inline void prefetch(const void* p, std::size_t bytes) {
+  const char* c = static_cast<const char*>(p);
+  for (std::size_t q = 0; q < bytes; q += 64) __builtin_prefetch(c + q, 0, 3);
+}
+
+}  // namespace sis
