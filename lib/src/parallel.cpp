@@ -16,7 +16,7 @@ namespace {
 // A waiter polls for this long (yielding the core to anything runnable)
 // before it sleeps. Waking a sleeping thread costs tens to hundreds of
 // microseconds on a virtual machine, as long as the work of a strip split in
-// two; the acquisition calls parallel_for twice per strip, back to back.
+// two; the acquisition calls parallel_for once per strip, strip after strip.
 constexpr auto kSpin = std::chrono::microseconds(200);
 
 template <typename Done>

@@ -11,9 +11,11 @@
 namespace sis {
 
 // How far ahead, in rows, for blocks of `bytes` bytes: about 2 KB of lines
-// in flight. (Measured on BM_Acquisition, float rows in 2 KB blocks: one row
-// ahead 44 ms, two 61 ms, none 73 ms; in siproject, half rows in 1 KB
-// blocks: two rows ahead beat one.)
+// in flight. (BM_Acquisition degree 3, one thread, float rows in 2 KB
+// blocks: one row ahead 44.9 ms against 56.3 ms without, medians of 12
+// alternated invocations; two rows ahead 60-62 ms in single runs. In
+// siproject, half rows in 1 KB blocks: two rows ahead beat one in perf's
+// samples.)
 inline long prefetch_rows(std::size_t bytes) {
   return std::max(1L, long(2048 / std::max<std::size_t>(bytes, 1)));
 }
