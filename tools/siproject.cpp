@@ -469,15 +469,10 @@ int run(const Options& o) {
           cartesian->add_rows(y, y1, [&](long gy, long k0, long k1, float* scratch) {
             const long r = gy - y;
             // the block a later call will ask for
-            const std::size_t n = std::size_t(k1 - k0), size = half ? sizeof(std::uint16_t) : sizeof(float);
-            const long ahead = r + prefetch_rows(n * size);
-            if (ahead < rows) {
-              const std::size_t at = ahead * row_size + k0;
-              if (half)
-                prefetch(half_rows[b].data() + at, n * size);
-              else
-                prefetch(float_rows[b].data() + at, n * size);
-            }
+            if (half)
+              prefetch_ahead(half_rows[b].data(), r, rows, row_size, k0, k1);
+            else
+              prefetch_ahead(float_rows[b].data(), r, rows, row_size, k0, k1);
             float* v = half ? scratch : float_rows[b].data() + r * row_size + k0;
             check(r, k0, k1, v);
             finish(r, k0, k1, v);

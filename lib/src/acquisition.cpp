@@ -65,9 +65,7 @@ T* aligned(T* p) {
 template <typename T>
 auto in_memory(long y0, long y1, const T* rows, std::size_t row_size) {
   return [=](long y, long k0, long k1, T*) {
-    const std::size_t bytes = std::size_t(k1 - k0) * sizeof(T);
-    const long ahead = y + prefetch_rows(bytes);
-    if (ahead < y1) prefetch(rows + (ahead - y0) * row_size + k0, bytes);
+    prefetch_ahead(rows, y - y0, y1 - y0, row_size, k0, k1);
     return rows + (y - y0) * row_size + k0;
   };
 }

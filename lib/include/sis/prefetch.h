@@ -28,4 +28,14 @@ inline void prefetch(const void* p, std::size_t bytes) {
   for (std::size_t q = 0; q < bytes; q += 64) __builtin_prefetch(c + q, 0, 3);
 }
 
+// For a stage at values [k0, k1) of row r of `rows` (rows [0, end), each
+// row_size values apart): prefetches the same values prefetch_rows() rows on,
+// if that row exists.
+template <typename T>
+inline void prefetch_ahead(const T* rows, long r, long end, std::size_t row_size, long k0, long k1) {
+  const std::size_t bytes = std::size_t(k1 - k0) * sizeof(T);
+  const long ahead = r + prefetch_rows(bytes);
+  if (ahead < end) prefetch(rows + std::size_t(ahead) * row_size + k0, bytes);
+}
+
 }  // namespace sis
