@@ -86,6 +86,84 @@ TEST(Acquisition, MatchesDirectSumAtAnyRatio) {
     }
 }
 
+TEST(Acquisition, RowGroupGivesTheBitsOfRowAfterRow) {
+  // add_scaled_row_group against a plain scalar loop, one row after another:
+  // each sum's terms in row order, a product then a sum each, the started
+  // sums' first term added to 0.0. Lengths not a multiple of any vector
+  // width, any row and sum count, float and double rows.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const long n = 203, offset = 5;
+  for (int rows = 1; rows <= 6; ++rows)
+    for (int count = 1; count <= 6; ++count)
+      for (int starts = 0; starts <= count; ++starts) {
+        std::vector<std::vector<float>> xf(rows, std::vector<float>(n));
+        std::vector<std::vector<double>> xd(rows, std::vector<double>(n)), w(rows, std::vector<double>(count));
+        for (int r = 0; r < rows; ++r) {
+          for (long k = 0; k < n; ++k) xd[r][k] = xf[r][k] = float(u(rng));
+          for (double& v : w[r]) v = u(rng);
+        }
+        std::vector<std::vector<double>> ref(count, std::vector<double>(offset + n));
+        for (auto& s : ref)
+          for (double& v : s) v = u(rng);
+        std::vector<std::vector<double>> got_f = ref, got_d = ref;
+        for (int i = 0; i < count; ++i)
+          for (int r = 0; r < rows; ++r)
+            for (long k = 0; k < n; ++k) {
+              const double before = (r == 0 && i >= count - starts) ? 0.0 : ref[i][offset + k];
+              const double term = w[r][i] * double(xf[r][k]);
+              ref[i][offset + k] = before + term;
+            }
+        std::vector<double*> sf(count), sd(count);
+        std::vector<const double*> wp(rows);
+        std::vector<const float*> xfp(rows);
+        std::vector<const double*> xdp(rows);
+        for (int i = 0; i < count; ++i) sf[i] = got_f[i].data(), sd[i] = got_d[i].data();
+        for (int r = 0; r < rows; ++r) wp[r] = w[r].data(), xfp[r] = xf[r].data(), xdp[r] = xd[r].data();
+        add_scaled_row_group(sf.data(), wp.data(), count, starts, offset, xfp.data(), rows, n);
+        add_scaled_row_group(sd.data(), wp.data(), count, starts, offset, xdp.data(), rows, n);
+        for (int i = 0; i < count; ++i) {
+          EXPECT_EQ(got_f[i], ref[i]) << rows << " rows, sum " << i << " of " << count << ", " << starts << " started";
+          EXPECT_EQ(got_d[i], ref[i]) << rows << " rows, sum " << i << " of " << count << ", " << starts << " started";
+        }
+      }
+}
+
+TEST(Acquisition, CoefficientsNoSampleReachesAreZero) {
+  // Upsampling 4 x 3 samples to 19 x 15 coefficients: the supports of many
+  // coefficients hold no sample, so their rows and columns get no weight.
+  // The coefficient grid starts unset (Grid kUnset); a freed grid of the same
+  // size filled with non-zeros goes first, so that unset memory would show.
+  const long W = 19, H = 15, win = 4, hin = 3;
+  const Image in = random_image(win, hin, 2, 7);
+  for (int d : {0, 1, 3}) {
+    const Kernel k = Kernel::bspline(d);
+    const AcquisitionPlan plan(win, hin, 2, W, H, Lattice::cartesian(), k, Boundary::Mirror,
+                               Method::MinError);
+    long empty_rows = 0;
+    for (long n = 0; n < H; ++n) empty_rows += plan.weights_y().begin(n) == plan.weights_y().end(n);
+    if (d < 3) {
+      EXPECT_GT(empty_rows, 0) << "degree " << d;
+    }
+    {
+      Grid<double> junk(W, H, 2);
+      std::fill(junk.data.begin(), junk.data.end(), 7.0);
+    }
+    const Coefficients got = acquire(in, plan, 2);
+    const double dx = double(W) / win, dy = double(H) / hin;
+    for (long n2 = 0; n2 < H; ++n2)
+      for (long n1 = 0; n1 < W; ++n1)
+        for (int c = 0; c < 2; ++c) {
+          double num = 0;
+          for (long j = -3 * hin; j < 4 * hin; ++j)
+            for (long i = -3 * win; i < 4 * win; ++i)
+              num += k.eval((i + 0.5) * dx - (n1 + 0.5)) * k.eval((j + 0.5) * dy - (n2 + 0.5)) *
+                     in.at(extend_index(i, win, Boundary::Mirror), extend_index(j, hin, Boundary::Mirror), c);
+          EXPECT_NEAR(got.c.at(n1, n2, c), num * dx * dy, 1e-12) << "degree " << d << " at " << n1 << ", " << n2;
+        }
+  }
+}
+
 TEST(Acquisition, BitIdenticalForAnyStripAndThreadCount) {
   const Image in = random_image(203, 171, 3, 1);
   const AcquisitionPlan plan(203, 171, 3, 50, 40, Lattice::cartesian(), Kernel::bspline(3),

@@ -268,7 +268,7 @@ TEST_F(Siproject, HalfOutputNeverHoldsInfinities) {
 
 TEST_F(Siproject, BitIdenticalForAnyThreadCount) {
   write_image(path("in.exr"), random_image(301, 203, 3, 3));
-  std::vector<float> first;
+  Buffer<float> first;
   for (int t : {1, 2, 3}) {
     ASSERT_EQ(run(path("in.exr") + " -o " + path("out.exr") + " --size 97x61 -q --threads " +
                   std::to_string(t)).status, 0);

@@ -106,7 +106,7 @@ TEST(Noise, GainMatchesTheory) {
   std::normal_distribution<float> noise(0, float(sigma));
   Image in(N * s, N * s, 1);
   for (float& v : in.data) v = 0.5f + noise(rng);
-  auto variance = [](const std::vector<double>& v) {
+  auto variance = [](const Buffer<double>& v) {
     double m = 0, q = 0;
     for (double x : v) m += x;
     m /= v.size();
@@ -129,7 +129,7 @@ TEST(Noise, GainMatchesTheory) {
     }), 2);
     const Image p = resample(k, Display::centred(), N, N);
     const double coef_gain = variance(k.c.data) / unit;
-    const double centred_gain = variance(std::vector<double>(p.data.begin(), p.data.end())) / unit;
+    const double centred_gain = variance(Buffer<double>(p.data.begin(), p.data.end())) / unit;
     EXPECT_NEAR(coef_gain / coef_theory, 1.0, 0.1) << "degree " << d << ": " << coef_gain;
     EXPECT_NEAR(centred_gain / centred_theory, 1.0, 0.1) << "degree " << d << ": " << centred_gain;
     if (d == 1) {
@@ -177,7 +177,7 @@ TEST(Stability, ClampsBoundTheDisplayedSamples) {
   Image img(3, 1, 1);
   img.data = {-0.5f, 0.5f, 2.0f};
   LocalRange lr(3, 1, 1, 3, 1);
-  const std::vector<float> row = {0.0f, 0.25f, 1.0f};
+  const Buffer<float> row = {0.0f, 0.25f, 1.0f};
   lr.add_rows(0, 1, row.data());
   const RangeReport r = report_range(img, &lr);
   EXPECT_EQ(r.negative, 1);
@@ -186,7 +186,7 @@ TEST(Stability, ClampsBoundTheDisplayedSamples) {
   EXPECT_EQ(r.max, 2.0);
   Image z = img;
   apply_clamp(z, Clamp::Zero, nullptr);
-  EXPECT_EQ(z.data, (std::vector<float>{0.0f, 0.5f, 2.0f}));
+  EXPECT_EQ(z.data, (Buffer<float>{0.0f, 0.5f, 2.0f}));
   Image l = img;
   apply_clamp(l, Clamp::Local, &lr);
   EXPECT_EQ(l.data, row);

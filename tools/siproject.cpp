@@ -415,6 +415,7 @@ int run(const Options& o) {
     long nonfinite = 0, first_x = -1, first_y = -1;
     int first_c = -1;
     std::string first_file;
+    std::unique_ptr<PrefilterPlan> prefilter_plan;
     {
       Progress progress(!o.quiet, "reading and acquiring");
       const auto t = Clock::now();
@@ -426,6 +427,12 @@ int run(const Options& o) {
           ch.reader->read_rows(ch.y0, ch.y1, float_rows[b].data());
       };
       ReadAhead ahead(chunks.size(), slots, read);
+      // The prefilter's plan (FFTW's planner, its first call the slowest)
+      // is made while the first strip decodes, not serially after the last.
+      if (cartesian && method == Method::MinError && generator.degree() > 0)
+        prefilter_plan = std::make_unique<PrefilterPlan>(
+            generator.degree(), plan->coefficients_x(), plan->coefficients_y(), boundary,
+            o.prefilter == "fft" ? PrefilterMethod::FFT : PrefilterMethod::Recursive);
       for (std::size_t i = 0; i < chunks.size(); ++i) {
         const Chunk& ch = chunks[i];
         const long y = ch.global, y1 = ch.global + ch.y1 - ch.y0;
@@ -508,7 +515,10 @@ int run(const Options& o) {
     }
     k = hex ? hexagonal->finish() : cartesian->finish();
     const auto t = Clock::now();
-    prefilter(k, threads, o.prefilter == "fft" ? PrefilterMethod::FFT : PrefilterMethod::Recursive);
+    if (prefilter_plan)
+      prefilter_plan->execute(k.c, threads);
+    else
+      prefilter(k, threads, o.prefilter == "fft" ? PrefilterMethod::FFT : PrefilterMethod::Recursive);
     t_prefilter = seconds_since(t);
     // Coefficients are kept in float, as a coefficient file stores them, so
     // that evaluating a written coefficient file reproduces this run exactly.
@@ -576,7 +586,7 @@ int run(const Options& o) {
                        {{"sis:input", md[4].second},
                         {"sis:input_format", input_half ? "half" : "float"},
                         {"sis:highlight_compress", compressed ? "1" : "0"}});
-  std::vector<double>().swap(k.c.data);
+  Buffer<double>().swap(k.c.data);
   write_image(o.output, image, names, md, alpha, out_format);
   const double t_write = seconds_since(t);
   if (o.verbose) {

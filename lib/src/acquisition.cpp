@@ -1,5 +1,6 @@
 #include "sis/acquisition.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <sstream>
@@ -50,6 +51,9 @@ AxisWeights acquisition_axis(int axis, long coefficients, long samples, double e
 // Values of a row handed to the vertical pass per call: the vertical sums of
 // a few coefficient rows over one block stay in the first-level cache.
 constexpr long kBlock = 512;
+
+// Rows summed together at most (add_scaled_row_group).
+constexpr int kGroup = 4;
 
 // Vertical sums and pieces start on 64-byte boundaries (a vector load or
 // store that straddles two cache lines costs two); the columns are split
@@ -143,15 +147,28 @@ void Acquisition::add(long y0, long y1, const Piece& piece) {
   }
   const long values = plan_.input_width() * plan_.channels();
   const AxisWeights& wy = plan_.weights_y();
-  if (acc_.data.empty())  // here, not in the constructor: a caller may overlap this with reading
-    acc_ = Grid<double>(plan_.coefficients_x(), plan_.coefficients_y(), plan_.channels());
+  if (acc_.data.empty()) {  // here, not in the constructor: a caller may overlap this with reading
+    // Unset: the horizontal pass writes every row but those that no input
+    // row reaches, zeroed here (their pages are first touched by the
+    // threads, not by a serial fill).
+    acc_ = Grid<double>(plan_.coefficients_x(), plan_.coefficients_y(), plan_.channels(), kUnset);
+    for (long n = 0; n < plan_.coefficients_y(); ++n)
+      if (wy.begin(n) == wy.end(n)) std::fill(acc_.row(n), acc_.row(n) + acc_.row_size(), 0.0);
+  }
 
-  // The coefficient rows each input row adds to (their vertical sums and
-  // weights), and those it starts (its term is their first: assigned, not
-  // added, so reused sum buffers need no zeroing); rows summed to the end
-  // here are filtered in the next call.
-  std::vector<std::vector<double*>> row_sums(y1 - y0), row_starts(y1 - y0);
-  std::vector<std::vector<double>> row_weights(y1 - y0), row_start_weights(y1 - y0);
+  // Per row of the strip: the coefficient rows it adds to (their vertical
+  // sums and weights), those it starts last (its term is their first:
+  // assigned, not added, so reused sum buffers need no zeroing); rows summed
+  // to the end here are filtered in the next call.
+  const long nrows = y1 - y0;
+  if (long(rows_.size()) < nrows) rows_.resize(nrows);
+  for (long r = 0; r < nrows; ++r) {
+    RowTargets& t = rows_[r];
+    t.sums.clear();
+    t.weights.clear();
+    t.start_sums.clear();
+    t.start_weights.clear();
+  }
   std::vector<long> completed;
   for (long n = 0; n < plan_.coefficients_y(); ++n) {
     long e = cursor_[n];
@@ -165,12 +182,28 @@ void Acquisition::add(long y0, long y1, const Piece& piece) {
       }
     }
     for (; e < wy.end(n) && wy.index[e] < y1; ++e) {
+      RowTargets& t = rows_[wy.index[e] - y0];
       const bool start = e == wy.begin(n);
-      (start ? row_starts : row_sums)[wy.index[e] - y0].push_back(sums_of(n));
-      (start ? row_start_weights : row_weights)[wy.index[e] - y0].push_back(wy.weight[e]);
+      (start ? t.start_sums : t.sums).push_back(sums_of(n));
+      (start ? t.start_weights : t.weights).push_back(wy.weight[e]);
     }
     cursor_[n] = e;
     if (e == wy.end(n)) completed.push_back(n);
+  }
+  // The started sums after the others; then runs of up to kGroup rows that
+  // add to the same sums, the later ones starting none, go to the vertical
+  // sums together (each sum loaded and stored once per run).
+  for (long r = 0; r < nrows; ++r) {
+    RowTargets& t = rows_[r];
+    t.starts = int(t.start_sums.size());
+    t.sums.insert(t.sums.end(), t.start_sums.begin(), t.start_sums.end());
+    t.weights.insert(t.weights.end(), t.start_weights.begin(), t.start_weights.end());
+  }
+  for (long r = 0; r < nrows;) {
+    int g = 1;
+    while (g < kGroup && r + g < nrows && rows_[r + g].starts == 0 && rows_[r + g].sums == rows_[r].sums) ++g;
+    rows_[r].group = g;
+    r += g;
   }
 
   // Each part: its share of the targets of the rows completed before, then
@@ -179,19 +212,25 @@ void Acquisition::add(long y0, long y1, const Piece& piece) {
   // row in increasing order.
   const long parts = std::min<long>(threads_, std::max(1L, values / kBlock));
   auto split = [&](long part) { return part == parts ? values : values * part / parts / kAlign * kAlign; };
+  const std::size_t room = (kGroup * kBlock * sizeof(T) + 64) / sizeof(double);  // a part's pieces
+  if (scratch_.size() < parts * room) scratch_.resize(parts * room);
   parallel_for(parts, threads_, [&](long p0, long p1) {
-    std::vector<T> buffer(kBlock + 64 / sizeof(T));
-    T* scratch = aligned(buffer.data());
+    T* scratch = aligned(reinterpret_cast<T*>(scratch_.data() + p0 * room));
     for (long part = p0; part < p1; ++part) {
       filter_complete(part, parts);
       const long k0 = split(part), k1 = split(part + 1);
       for (long b = k0; b < k1; b += kBlock) {
         const long len = std::min(k1, b + kBlock) - b;
-        for (long r = 0; r < y1 - y0; ++r) {
-          const T* x = piece(y0 + r, b, b + len, scratch);
-          add_scaled_rows(row_starts[r].data(), row_start_weights[r].data(),
-                          int(row_starts[r].size()), b, x, len, true);
-          add_scaled_rows(row_sums[r].data(), row_weights[r].data(), int(row_sums[r].size()), b, x, len);
+        for (long r = 0; r < nrows; r += rows_[r].group) {
+          const int g = rows_[r].group;
+          const T* x[kGroup];
+          const double* w[kGroup];
+          for (int i = 0; i < g; ++i) {
+            x[i] = piece(y0 + r + i, b, b + len, scratch + i * kBlock);
+            w[i] = rows_[r + i].weights.data();
+          }
+          add_scaled_row_group(rows_[r].sums.data(), w, int(rows_[r].sums.size()), rows_[r].starts,
+                               b, x, g, len);
         }
       }
     }

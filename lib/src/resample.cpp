@@ -98,10 +98,12 @@ AxisWeights display_axis(const Coefficients& k, int axis, long out_count,
   return make_axis_weights(out_count, ncoef, k.boundary, range, weight);
 }
 
-// acc += weight * separable application of (wx, wy) to the coefficients.
+// acc += weight * separable application of (wx, wy) to the coefficients;
+// with `assign`, acc = 0 + that, the same bits as added to a zeroed acc, so
+// that acc may start unset.
 template <typename T>
 void apply_separable(const Grid<double>& c, const AxisWeights& wx, const AxisWeights& wy,
-                     double scale, Grid<T>& acc, int threads) {
+                     double scale, Grid<T>& acc, int threads, bool assign = false) {
   const int C = c.channels;
   parallel_for(acc.height, threads, [&](long j0, long j1) {
     std::vector<double> tmp(c.row_size()), row(std::size_t(acc.width) * C);
@@ -113,7 +115,10 @@ void apply_separable(const Grid<double>& c, const AxisWeights& wx, const AxisWei
                         e == wy.begin(j));
       apply_weights(wx, tmp.data(), C, 0, acc.width, row.data());
       T* out = acc.row(j);
-      for (std::size_t q = 0; q < row.size(); ++q) out[q] = static_cast<T>(out[q] + scale * row[q]);
+      if (assign)
+        for (std::size_t q = 0; q < row.size(); ++q) out[q] = static_cast<T>(0.0 + scale * row[q]);
+      else
+        for (std::size_t q = 0; q < row.size(); ++q) out[q] = static_cast<T>(out[q] + scale * row[q]);
     }
   });
 }
@@ -155,11 +160,11 @@ Image resample(const Coefficients& k, const Display& display, long out_width, lo
   }
   // One pass (pixel, or a product set of offsets such as 2x2) writes the
   // float image directly; other offset lists accumulate in double.
-  Image out(out_width, out_height, k.c.channels);
+  Image out(out_width, out_height, k.c.channels, kUnset);  // every path writes all of it
   if (display.mode == Display::Mode::PixelAverage) {
     const AxisWeights wx = display_axis(k, 0, out_width, {}, true);
     const AxisWeights wy = display_axis(k, 1, out_height, {}, true);
-    apply_separable(k.c, wx, wy, 1.0, out, threads);
+    apply_separable(k.c, wx, wy, 1.0, out, threads, true);
     return out;
   }
   if (display.offsets.empty()) throw std::invalid_argument("resample(): display has no offsets");
@@ -173,7 +178,7 @@ Image resample(const Coefficients& k, const Display& display, long out_width, lo
   if (pairs.size() == display.offsets.size() && pairs.size() == xs.size() * ys.size()) {
     const AxisWeights wx = display_axis(k, 0, out_width, std::vector<double>(xs.begin(), xs.end()), false);
     const AxisWeights wy = display_axis(k, 1, out_height, std::vector<double>(ys.begin(), ys.end()), false);
-    apply_separable(k.c, wx, wy, 1.0, out, threads);
+    apply_separable(k.c, wx, wy, 1.0, out, threads, true);
     return out;
   }
   Grid<double> acc(out_width, out_height, k.c.channels);

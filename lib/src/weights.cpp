@@ -109,39 +109,74 @@ bool has_avx() {
 }
 #endif
 
-// sums[t][k] += w[t] * x[k] (Assign: =) for N rows t at once, x read once:
-// elementwise, a product then a sum, so the same bits at any vector width,
-// which the clones choose by the processor.
-template <int N, bool Assign, typename T>
+// sums[i][k] += w[r][i] * x[r][k] for N sums i and R rows r at once, the
+// rows in order: each sum element is loaded once, gets its R terms (a
+// product, then a sum, each) and is stored once; each x[r][k] is read once.
+// AssignFirst: row 0's term is the sums' first, 0.0 + w[0][i] * x[0][k],
+// the bits of adding it to zeros, without reading the sums. Elementwise, so
+// the same bits at any vector width, which the clones choose by the
+// processor.
+template <int N, int R, bool AssignFirst, typename T>
 __attribute__((target_clones("avx512f", "avx2", "default"))) void add_scaled(
-    double* const* sums, const double* w, const T* __restrict x, long n) {
-  static_assert(N >= 1 && N <= 4);
+    double* const* sums, const double* const* w, const T* const* xs, long n) {
+  static_assert(N >= 1 && N <= 4 && R >= 1 && R <= 4);
   double* __restrict s0 = sums[0];
   double* __restrict s1 = N > 1 ? sums[1] : nullptr;
   double* __restrict s2 = N > 2 ? sums[2] : nullptr;
   double* __restrict s3 = N > 3 ? sums[3] : nullptr;
-  const double w0 = w[0], w1 = N > 1 ? w[1] : 0, w2 = N > 2 ? w[2] : 0, w3 = N > 3 ? w[3] : 0;
+  const T* __restrict x0 = xs[0];
+  const T* __restrict x1 = R > 1 ? xs[1] : nullptr;
+  const T* __restrict x2 = R > 2 ? xs[2] : nullptr;
+  const T* __restrict x3 = R > 3 ? xs[3] : nullptr;
+  double a[R][N];
+  for (int r = 0; r < R; ++r)
+    for (int i = 0; i < N; ++i) a[r][i] = w[r][i];
   for (long k = 0; k < n; ++k) {
-    const double v = x[k];
-    s0[k] = (Assign ? 0.0 : s0[k]) + w0 * v;
-    if constexpr (N > 1) s1[k] = (Assign ? 0.0 : s1[k]) + w1 * v;
-    if constexpr (N > 2) s2[k] = (Assign ? 0.0 : s2[k]) + w2 * v;
-    if constexpr (N > 3) s3[k] = (Assign ? 0.0 : s3[k]) + w3 * v;
+    double v[R];
+    v[0] = x0[k];
+    if constexpr (R > 1) v[1] = x1[k];
+    if constexpr (R > 2) v[2] = x2[k];
+    if constexpr (R > 3) v[3] = x3[k];
+    auto one = [&](double* __restrict s, int i) {
+      double t = AssignFirst ? 0.0 : s[k];
+      for (int r = 0; r < R; ++r) t = t + a[r][i] * v[r];
+      s[k] = t;
+    };
+    one(s0, 0);
+    if constexpr (N > 1) one(s1, 1);
+    if constexpr (N > 2) one(s2, 2);
+    if constexpr (N > 3) one(s3, 3);
   }
 }
 
-template <bool Assign, typename T>
-void scaled_rows(double* const* sums, const double* w, int count, long offset, const T* x, long n) {
+// Any number of sums, four at a time, for R rows.
+template <int R, bool AssignFirst, typename T>
+void scaled(double* const* sums, const double* const* w, int count, long offset,
+            const T* const* x, long n) {
   for (int t = 0; t < count; t += 4) {
     double* s[4];
+    const double* wt[R];
     const int m = std::min(4, count - t);
     for (int i = 0; i < m; ++i) s[i] = sums[t + i] + offset;
+    for (int r = 0; r < R; ++r) wt[r] = w[r] + t;
     switch (m) {
-      case 1: add_scaled<1, Assign>(s, w + t, x, n); break;
-      case 2: add_scaled<2, Assign>(s, w + t, x, n); break;
-      case 3: add_scaled<3, Assign>(s, w + t, x, n); break;
-      default: add_scaled<4, Assign>(s, w + t, x, n); break;
+      case 1: add_scaled<1, R, AssignFirst>(s, wt, x, n); break;
+      case 2: add_scaled<2, R, AssignFirst>(s, wt, x, n); break;
+      case 3: add_scaled<3, R, AssignFirst>(s, wt, x, n); break;
+      default: add_scaled<4, R, AssignFirst>(s, wt, x, n); break;
     }
+  }
+}
+
+// Up to four rows.
+template <bool AssignFirst, typename T>
+void scaled(double* const* sums, const double* const* w, int count, long offset,
+            const T* const* x, int rows, long n) {
+  switch (rows) {
+    case 1: return scaled<1, AssignFirst>(sums, w, count, offset, x, n);
+    case 2: return scaled<2, AssignFirst>(sums, w, count, offset, x, n);
+    case 3: return scaled<3, AssignFirst>(sums, w, count, offset, x, n);
+    default: return scaled<4, AssignFirst>(sums, w, count, offset, x, n);
   }
 }
 
@@ -177,13 +212,36 @@ void apply_weights(const AxisWeights& w, const double* in, int channels, long t0
 template <typename T>
 void add_scaled_rows(double* const* sums, const double* w, int count, long offset, const T* x,
                      long n, bool assign) {
+  const double* ws[1] = {w};
+  const T* xs[1] = {x};
   if (assign)
-    scaled_rows<true>(sums, w, count, offset, x, n);
+    scaled<1, true>(sums, ws, count, offset, xs, n);
   else
-    scaled_rows<false>(sums, w, count, offset, x, n);
+    scaled<1, false>(sums, ws, count, offset, xs, n);
 }
 template void add_scaled_rows(double* const*, const double*, int, long, const float*, long, bool);
 template void add_scaled_rows(double* const*, const double*, int, long, const double*, long, bool);
+
+template <typename T>
+void add_scaled_row_group(double* const* sums, const double* const* w, int count, int starts,
+                          long offset, const T* const* x, int rows, long n) {
+  const int adds = count - starts;
+  for (int r = 0; r < rows; r += 4) {
+    const int g = std::min(4, rows - r);
+    scaled<false>(sums, w + r, adds, offset, x + r, g, n);
+    if (starts == 0) continue;
+    const double* ws[4];
+    for (int i = 0; i < g; ++i) ws[i] = w[r + i] + adds;
+    if (r == 0)
+      scaled<true>(sums + adds, ws, starts, offset, x, g, n);
+    else
+      scaled<false>(sums + adds, ws, starts, offset, x + r, g, n);
+  }
+}
+template void add_scaled_row_group(double* const*, const double* const*, int, int, long,
+                                   const float* const*, int, long);
+template void add_scaled_row_group(double* const*, const double* const*, int, int, long,
+                                   const double* const*, int, long);
 
 AxisWeights make_axis_weights(long targets, long sources, Boundary boundary,
                               const std::function<std::pair<long, long>(long)>& range,

@@ -91,6 +91,15 @@ class Acquisition {
   std::vector<std::vector<double>> sums_;  // per coefficient row: its vertical sum while open
   std::vector<std::vector<double>> spare_; // released sums, reused
   std::vector<long> complete_;             // rows summed, not yet filtered horizontally
+  // Per row of the strip being added: the sums it adds to (those it starts
+  // last), their weights, and the rows summed with it from here (group).
+  struct RowTargets {
+    std::vector<double*> sums, start_sums;
+    std::vector<double> weights, start_weights;
+    int starts = 0, group = 1;
+  };
+  std::vector<RowTargets> rows_;  // kept between strips, as their capacity
+  std::vector<double> scratch_;   // the pieces of each part's rows
   template <typename T, typename Piece>
   void add(long y0, long y1, const Piece& piece);
   void filter_complete(long part, long parts);

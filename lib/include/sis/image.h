@@ -2,7 +2,11 @@
 // In-memory images and coefficient grids. Pixels are interleaved
 // (channel fastest), rows top to bottom, as in the image file.
 #include <cstddef>
+#include <memory>
+#include <new>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "sis/boundary.h"
@@ -11,14 +15,47 @@
 
 namespace sis {
 
+// std::allocator, except that a value-initialised element (vector(n),
+// resize(n)) is default-initialised: numbers are left unset. Grid's own
+// constructor still zeroes; Grid(w, h, c, kUnset) does not, for a grid whose
+// every element its first pass writes, so that no serial pass zeroes it
+// first and its pages are first touched by the threads that write them.
+template <typename T>
+struct DefaultInitAllocator : std::allocator<T> {
+  template <typename U>
+  struct rebind {
+    using other = DefaultInitAllocator<U>;
+  };
+  DefaultInitAllocator() = default;
+  template <typename U>
+  DefaultInitAllocator(const DefaultInitAllocator<U>&) noexcept {}
+  template <typename U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
+template <typename T>
+using Buffer = std::vector<T, DefaultInitAllocator<T>>;
+
+struct Unset {};
+inline constexpr Unset kUnset{};
+
 template <typename T>
 struct Grid {
   long width = 0, height = 0;
   int channels = 0;
-  std::vector<T> data;
+  Buffer<T> data;
 
   Grid() = default;
-  Grid(long w, long h, int c) : width(w), height(h), channels(c), data(std::size_t(w) * h * c) {}
+  // All elements zero.
+  Grid(long w, long h, int c) : width(w), height(h), channels(c), data(std::size_t(w) * h * c, T()) {}
+  // Elements unset: the caller writes every one before any is read.
+  Grid(long w, long h, int c, Unset) : width(w), height(h), channels(c), data(std::size_t(w) * h * c) {}
   T* row(long y) { return data.data() + std::size_t(y) * width * channels; }
   const T* row(long y) const { return data.data() + std::size_t(y) * width * channels; }
   T& at(long x, long y, int c) { return data[(std::size_t(y) * width + x) * channels + c]; }

@@ -43,6 +43,16 @@ template <typename T>
 void add_scaled_rows(double* const* sums, const double* w, int count, long offset, const T* x,
                      long n, bool assign = false);
 
+// Several rows into the same sums: for each sum i, the terms of rows
+// x[0], ..., x[rows - 1] in that order, sums[i][offset + k] +=
+// w[r][i] * x[r][k], except that the last `starts` sums begin with row 0's
+// term (assigned, as add_scaled_rows with assign): the bits of
+// add_scaled_rows row after row. Each sum is loaded and stored once per four
+// rows.
+template <typename T>
+void add_scaled_row_group(double* const* sums, const double* const* w, int count, int starts,
+                          long offset, const T* const* x, int rows, long n);
+
 // Builds a table: for target t, the extended source indices k in
 // range(t) = [first, last] get weight(t, k); k is folded by the boundary rule.
 AxisWeights make_axis_weights(long targets, long sources, Boundary boundary,
