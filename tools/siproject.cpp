@@ -403,8 +403,8 @@ int run(const Options& o) {
     // slot measured no faster on two cores, and costs a strip of memory.)
     const std::size_t row_size = std::size_t(win) * C;
     const int slots = 2;
-    std::vector<std::vector<std::uint16_t>> half_rows(slots);
-    std::vector<std::vector<float>> float_rows(slots);
+    std::vector<Buffer<std::uint16_t>> half_rows(slots);  // unset: each strip is read into them
+    std::vector<Buffer<float>> float_rows(slots);
     for (int b = 0; b < slots; ++b) {
       if (half) half_rows[b].resize(strip * row_size);
       if (!half || hex) float_rows[b].resize(strip * row_size);
@@ -415,7 +415,6 @@ int run(const Options& o) {
     long nonfinite = 0, first_x = -1, first_y = -1;
     int first_c = -1;
     std::string first_file;
-    std::unique_ptr<PrefilterPlan> prefilter_plan;
     {
       Progress progress(!o.quiet, "reading and acquiring");
       const auto t = Clock::now();
@@ -427,12 +426,6 @@ int run(const Options& o) {
           ch.reader->read_rows(ch.y0, ch.y1, float_rows[b].data());
       };
       ReadAhead ahead(chunks.size(), slots, read);
-      // The prefilter's plan (FFTW's planner, its first call the slowest)
-      // is made while the first strip decodes, not serially after the last.
-      if (cartesian && method == Method::MinError && generator.degree() > 0)
-        prefilter_plan = std::make_unique<PrefilterPlan>(
-            generator.degree(), plan->coefficients_x(), plan->coefficients_y(), boundary,
-            o.prefilter == "fft" ? PrefilterMethod::FFT : PrefilterMethod::Recursive);
       for (std::size_t i = 0; i < chunks.size(); ++i) {
         const Chunk& ch = chunks[i];
         const long y = ch.global, y1 = ch.global + ch.y1 - ch.y0;
@@ -515,10 +508,7 @@ int run(const Options& o) {
     }
     k = hex ? hexagonal->finish() : cartesian->finish();
     const auto t = Clock::now();
-    if (prefilter_plan)
-      prefilter_plan->execute(k.c, threads);
-    else
-      prefilter(k, threads, o.prefilter == "fft" ? PrefilterMethod::FFT : PrefilterMethod::Recursive);
+    prefilter(k, threads, o.prefilter == "fft" ? PrefilterMethod::FFT : PrefilterMethod::Recursive);
     t_prefilter = seconds_since(t);
     // Coefficients are kept in float, as a coefficient file stores them, so
     // that evaluating a written coefficient file reproduces this run exactly.

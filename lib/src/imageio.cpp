@@ -263,7 +263,7 @@ void write_image(const std::string& path, const Image& image,
   if (alpha_channel >= 0 && alpha_channel < image.channels) spec.alpha_channel = alpha_channel;
   for (const auto& [k, v] : metadata) spec.attribute(k, v);
   if (stored == TypeDesc::HALF) {  // converted here: OpenImageIO's conversion is serial and slower
-    std::vector<std::uint16_t> half(image.data.size());
+    Buffer<std::uint16_t> half(image.data.size());  // unset: every value converted
     float_to_half(image.data.data(), half.data(), half.size());
     write_atomically(path, spec, TypeDesc::HALF, half.data());
     return;
