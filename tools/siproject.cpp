@@ -368,18 +368,6 @@ int run(const Options& o) {
     std::unique_ptr<Acquisition> cartesian;
     std::unique_ptr<HexAcquisitionPlan> hex_plan;
     std::unique_ptr<HexAcquisition> hexagonal;
-    if (hex) {
-      const HexLayout layout =
-          hex_layout(o.density, double(W), double(H), hex_default_margin(hex_order));
-      hex_plan = std::make_unique<HexAcquisitionPlan>(win, hin, C, double(W), double(H), layout,
-                                                      hex_order, boundary, quadrature);
-      hexagonal = std::make_unique<HexAcquisition>(*hex_plan, threads);
-    } else {
-      plan = std::make_unique<AcquisitionPlan>(win, hin, C, double(W), double(H),
-                                               Lattice::cartesian(), generator, boundary, method);
-      cartesian = std::make_unique<Acquisition>(*plan, threads);
-    }
-    local = std::make_unique<LocalRange>(win, hin, C, W, H);
     // The rows as chunks of the bands (one band for one input), in order.
     struct Chunk {
       ImageReader* reader;
@@ -426,6 +414,20 @@ int run(const Options& o) {
           ch.reader->read_rows(ch.y0, ch.y1, float_rows[b].data());
       };
       ReadAhead ahead(chunks.size(), slots, read);
+      // The plans (the weights of every input row and column, some
+      // milliseconds) are made while the first strips decode.
+      if (hex) {
+        const HexLayout layout =
+            hex_layout(o.density, double(W), double(H), hex_default_margin(hex_order));
+        hex_plan = std::make_unique<HexAcquisitionPlan>(win, hin, C, double(W), double(H), layout,
+                                                        hex_order, boundary, quadrature);
+        hexagonal = std::make_unique<HexAcquisition>(*hex_plan, threads);
+      } else {
+        plan = std::make_unique<AcquisitionPlan>(win, hin, C, double(W), double(H),
+                                                 Lattice::cartesian(), generator, boundary, method);
+        cartesian = std::make_unique<Acquisition>(*plan, threads);
+      }
+      local = std::make_unique<LocalRange>(win, hin, C, W, H);
       for (std::size_t i = 0; i < chunks.size(); ++i) {
         const Chunk& ch = chunks[i];
         const long y = ch.global, y1 = ch.global + ch.y1 - ch.y0;

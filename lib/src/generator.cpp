@@ -75,9 +75,12 @@ std::vector<double> bspline_autocorrelation(int degree) {
 }
 
 double bspline_autocorrelation_spectrum(int degree, double omega) {
-  const std::vector<double> a = bspline_autocorrelation(degree);
+  return bspline_autocorrelation_spectrum(bspline_autocorrelation(degree), omega);
+}
+
+double bspline_autocorrelation_spectrum(const std::vector<double>& a, double omega) {
   double s = a[0];
-  for (int k = 1; k <= degree; ++k) s += 2.0 * a[k] * std::cos(k * omega);
+  for (std::size_t k = 1; k < a.size(); ++k) s += 2.0 * a[k] * std::cos(double(k) * omega);
   return s;
 }
 

@@ -54,6 +54,7 @@ PrefilterPlan1D::PrefilterPlan1D(int degree, long n, Boundary boundary, Prefilte
   scale_re_.resize(h + 1);
   scale_im_.resize(h + 1);
   const bool mirror = boundary == Boundary::Mirror;
+  const std::vector<double> a = bspline_autocorrelation(degree);
   if (mirror)  // v = (x0, x2, x4, ..., x5, x3, x1)
     for (long k = 0; k < n; ++k) slot_[k] = k % 2 ? n - 1 - k / 2 : k / 2;
   for (long k = 0; k <= h; ++k) {
@@ -64,10 +65,10 @@ PrefilterPlan1D::PrefilterPlan1D(int degree, long n, Boundary boundary, Prefilte
       // X[n - k] by A_d(pi (n - k) / n).
       cos_[k] = std::cos(kPi * k / (2.0 * n));
       sin_[k] = std::sin(kPi * k / (2.0 * n));
-      scale_re_[k] = 1.0 / (n * bspline_autocorrelation_spectrum(degree, kPi * k / n));
-      scale_im_[k] = k == 0 ? 0.0 : 1.0 / (n * bspline_autocorrelation_spectrum(degree, kPi * (n - k) / n));
+      scale_re_[k] = 1.0 / (n * bspline_autocorrelation_spectrum(a, kPi * k / n));
+      scale_im_[k] = k == 0 ? 0.0 : 1.0 / (n * bspline_autocorrelation_spectrum(a, kPi * (n - k) / n));
     } else {
-      scale_re_[k] = scale_im_[k] = 1.0 / (n * bspline_autocorrelation_spectrum(degree, 2 * kPi * k / n));
+      scale_re_[k] = scale_im_[k] = 1.0 / (n * bspline_autocorrelation_spectrum(a, 2 * kPi * k / n));
     }
   }
   FftwBuffer buf(workspace_size());

@@ -24,6 +24,9 @@ std::vector<double> bspline_autocorrelation(int degree);
 // Fourier transform of the autocorrelation sequence,
 // A_d(w) = a[0] + 2 sum_k a[k] cos(k w). Positive for every w.
 double bspline_autocorrelation_spectrum(int degree, double omega);
+// The same from the autocorrelation a = bspline_autocorrelation(degree),
+// computed once for many frequencies.
+double bspline_autocorrelation_spectrum(const std::vector<double>& a, double omega);
 
 // Poles z_i in (-1, 0) of 1/A_d (the interpolation prefilter of the degree
 // 2d+1 B-spline), so that 1/A_d(Z) = G prod_i 1/((1 - z_i Z)(1 - z_i/Z)),
