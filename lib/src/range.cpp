@@ -111,9 +111,9 @@ void across_sse(const float* row, const long* xb, const long* xe, long width, lo
   // flight instead of one.
   auto four = [&](long n) {
     const long count = xe[n] - xb[n];
-    if (n + 4 > width || xe[n + 1] - xb[n + 1] != count || xe[n + 2] - xb[n + 2] != count ||
-        xe[n + 3] - xb[n + 3] != count || (C == 3 && xe[n + 3] >= samples))
-      return false;
+    if (n + 4 > width) return false;
+    for (long j = n; j < n + 4; ++j)  // as many samples; with three channels, loads of 4 in the row
+      if (xe[j] - xb[j] != count || (C == 3 && xe[j] >= samples)) return false;
     __m128 a0 = _mm_set1_ps(Min ? INFINITY : -INFINITY), a1 = a0, a2 = a0, a3 = a0;
     const float* p0 = row + std::size_t(xb[n]) * C;
     const float* p1 = row + std::size_t(xb[n + 1]) * C;
