@@ -674,7 +674,7 @@ def main():
             si["floor"] = floor["walls"][0]
             floor["floor"] = floor["walls"][0]
 
-        reps = 1 if args.quick else 5
+        reps = 1 if args.quick else max(5, args.runs)  # as many rounds as the table, at least 5
         log(f"microbench BM_Acquisition at 1 and 2 threads ({reps} round(s))")
         samples, mcmd = microbench_acquisition(args.microbench, reps)
         times = {k: statistics.median(v) for k, v in samples.items()}
