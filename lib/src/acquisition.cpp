@@ -195,13 +195,12 @@ void Acquisition::add(long y0, long y1, const Piece& piece) {
   // sums together (each sum loaded and stored once per run).
   for (long r = 0; r < nrows; ++r) {
     RowTargets& t = rows_[r];
-    t.starts = int(t.start_sums.size());
     t.sums.insert(t.sums.end(), t.start_sums.begin(), t.start_sums.end());
     t.weights.insert(t.weights.end(), t.start_weights.begin(), t.start_weights.end());
   }
   for (long r = 0; r < nrows;) {
     int g = 1;
-    while (g < kGroup && r + g < nrows && rows_[r + g].starts == 0 && rows_[r + g].sums == rows_[r].sums) ++g;
+    while (g < kGroup && r + g < nrows && rows_[r + g].start_sums.empty() && rows_[r + g].sums == rows_[r].sums) ++g;
     rows_[r].group = g;
     r += g;
   }
@@ -229,8 +228,9 @@ void Acquisition::add(long y0, long y1, const Piece& piece) {
             x[i] = piece(y0 + r + i, b, b + len, scratch + i * kBlock);
             w[i] = rows_[r + i].weights.data();
           }
-          add_scaled_row_group(rows_[r].sums.data(), w, int(rows_[r].sums.size()), rows_[r].starts,
-                               b, x, g, len);
+          const RowTargets& t = rows_[r];
+          add_scaled_row_group(t.sums.data(), w, int(t.sums.size()), int(t.start_sums.size()), b, x,
+                               g, len);
         }
       }
     }

@@ -91,12 +91,13 @@ class Acquisition {
   std::vector<std::vector<double>> sums_;  // per coefficient row: its vertical sum while open
   std::vector<std::vector<double>> spare_; // released sums, reused
   std::vector<long> complete_;             // rows summed, not yet filtered horizontally
-  // Per row of the strip being added: the sums it adds to (those it starts
-  // last), their weights, and the rows summed with it from here (group).
+  // Per row of the strip being added: the sums it adds to (those it starts,
+  // start_sums, last), their weights, and the rows summed with it from here
+  // (group).
   struct RowTargets {
     std::vector<double*> sums, start_sums;
     std::vector<double> weights, start_weights;
-    int starts = 0, group = 1;
+    int group = 1;
   };
   std::vector<RowTargets> rows_;  // kept between strips, as their capacity
   std::vector<double> scratch_;   // the pieces of each part's rows
