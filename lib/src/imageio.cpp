@@ -6,6 +6,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <thread>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -132,6 +136,129 @@ SampleFormat parse_sample_format(const std::string& spelling) {
   if (spelling == "half") return SampleFormat::Half;
   if (spelling == "float") return SampleFormat::Float;
   throw std::invalid_argument("sample format '" + spelling + "': expected half or float");
+}
+
+long decode_strip_rows(const ImageReader& reader) {
+  const long row_bytes =
+      std::max(1L, reader.width() * reader.channels() * (reader.stores_half() ? 2L : 4L));
+  return std::clamp(16 * ((1L << 20) / row_bytes / 16), 16L, 256L);
+}
+
+namespace {
+// OpenImageIO's exr_threads at -1 while it lives: OpenEXR files opened then
+// decode in the thread that reads them (the setting applies at opening);
+// the former value is restored for later files (the output's compression).
+class ExrThreadsOff {
+ public:
+  ExrThreadsOff() {
+    OIIO::getattribute("exr_threads", old_);
+    OIIO::attribute("exr_threads", -1);
+  }
+  ~ExrThreadsOff() { OIIO::attribute("exr_threads", old_); }
+  ExrThreadsOff(const ExrThreadsOff&) = delete;
+  ExrThreadsOff& operator=(const ExrThreadsOff&) = delete;
+
+ private:
+  int old_ = 0;
+};
+}  // namespace
+
+void read_strips(const std::vector<std::string>& paths, long strip, int threads, bool half,
+                 const std::function<bool(const Strip&)>& consume) {
+  if (strip < 1) throw std::invalid_argument("read_strips(): strip < 1");
+  struct Job {
+    std::size_t band;
+    long y0, y1, global;
+  };
+  std::vector<Job> jobs;
+  // One set of readers per thread when every band is OpenEXR (any strip can
+  // be read at any time), else one set that the threads take in turn.
+  std::vector<std::vector<std::unique_ptr<ImageReader>>> sets(1);
+  bool parallel = false;
+  int T = 1;
+  std::size_t values = 0;  // largest strip
+  {
+    ExrThreadsOff off;
+    for (const std::string& p : paths) sets[0].push_back(std::make_unique<ImageReader>(p));
+    long global = 0;
+    for (std::size_t b = 0; b < paths.size(); ++b) {
+      const ImageReader& r = *sets[0][b];
+      if (half && !r.stores_half())
+        throw std::logic_error(r.path() + ": read_strips() with half on samples not stored as half");
+      for (long y = 0; y < r.height(); y += strip)
+        jobs.push_back({b, y, std::min(r.height(), y + strip), global + y});
+      global += r.height();
+      values = std::max(values, std::size_t(std::min(strip, r.height())) * r.width() * r.channels());
+    }
+    T = int(std::clamp<long>(threads, 1, std::max<std::size_t>(1, jobs.size())));
+    parallel = T > 1 && std::all_of(sets[0].begin(), sets[0].end(),
+                                    [](const auto& r) { return r->format_name() == "openexr"; });
+    for (int t = 1; parallel && t < T; ++t) {
+      sets.emplace_back();
+      for (const std::string& p : paths) sets.back().push_back(std::make_unique<ImageReader>(p));
+    }
+  }
+  std::mutex m;
+  std::condition_variable cv;
+  std::size_t next_read = 0, next_consume = 0;
+  std::size_t limit = jobs.size();  // strips from here on are not used
+  std::exception_ptr error;         // the error of strip `limit`, if any
+  auto stop_at = [&](std::size_t i, std::exception_ptr e) {
+    std::lock_guard<std::mutex> lock(m);
+    if (i < limit || (i == limit && !error)) limit = i, error = e;
+    cv.notify_all();
+  };
+  auto worker = [&](int t) {
+    auto& readers = sets[parallel ? t : 0];
+    Buffer<std::uint16_t> half_rows(half ? values : 0);  // unset: each strip is read into them
+    Buffer<float> float_rows(half ? 0 : values);
+    for (std::size_t i = t; i < jobs.size(); i += T) {
+      const Job& j = jobs[i];
+      ImageReader& r = *readers[j.band];
+      try {
+        if (!parallel) {  // reads in row order, one at a time
+          std::unique_lock<std::mutex> lock(m);
+          cv.wait(lock, [&] { return next_read == i || i >= limit; });
+          if (i >= limit) return;
+        }
+        if (half)
+          r.read_rows_half(j.y0, j.y1, half_rows.data());
+        else
+          r.read_rows(j.y0, j.y1, float_rows.data());
+        if (!parallel) {
+          std::lock_guard<std::mutex> lock(m);
+          ++next_read;
+          cv.notify_all();
+        }
+      } catch (...) {
+        return stop_at(i, std::current_exception());
+      }
+      {
+        std::unique_lock<std::mutex> lock(m);
+        cv.wait(lock, [&] { return next_consume == i || i >= limit; });
+        if (i >= limit) return;
+      }
+      bool more;
+      try {
+        more = consume(Strip{j.band, &paths[j.band], j.y0, j.y1, j.global,
+                             half ? half_rows.data() : nullptr, half ? nullptr : float_rows.data()});
+      } catch (...) {
+        return stop_at(i, std::current_exception());
+      }
+      {
+        std::lock_guard<std::mutex> lock(m);
+        next_consume = i + 1;
+        if (!more && i + 1 <= limit) limit = i + 1, error = nullptr;  // before later strips' errors
+        cv.notify_all();
+      }
+      if (!more) return;
+    }
+  };
+  std::vector<std::thread> helpers;
+  for (int t = 1; t < T; ++t) helpers.emplace_back(worker, t);
+  worker(0);
+  for (auto& h : helpers) h.join();
+  if (error) std::rethrow_exception(error);
 }
 
 std::string sample_format_name(SampleFormat f) { return f == SampleFormat::Half ? "half" : "float"; }

@@ -4,6 +4,7 @@
 // coefficient files (float EXR whose metadata records the approximation).
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -80,6 +81,40 @@ class ImageReader {
   std::string path_;
   void read(long y0, long y1, SampleFormat type, void* rows);
 };
+
+// A strip that read_strips hands over: rows [y0, y1) of band `band` (0-based
+// in its data window; `path` is its file), rows [global, global + y1 - y0)
+// of the image the bands tile, with its samples as stored: half bits in
+// `half`, or floats in `floats` (writable), width * channels per row.
+struct Strip {
+  std::size_t band;
+  const std::string* path;
+  long y0, y1, global;
+  const std::uint16_t* half;
+  float* floats;
+};
+
+// Rows per strip for read_strips: about 1 MB of stored samples, whole
+// 16-row zip blocks (OpenEXR's largest common block is 32 rows; 16 keeps a
+// strip in the second-level cache of the core that decodes it).
+long decode_strip_rows(const ImageReader& reader);
+
+// Reads row bands of one image (`paths`, in row order) in strips of `strip`
+// rows on `threads` threads and calls consume(s) for every strip, one call
+// at a time and in row order, on the thread that decoded the strip: while
+// one thread uses a strip, the others decode the next ones. OpenEXR files
+// are decoded by every thread at once, each through a reader of its own
+// with OpenEXR's thread pool off (OpenImageIO's exr_threads -1 while they
+// open), so a strip's samples are used from the cache of the core that
+// wrote them; other formats are read by one thread at a time, in order.
+// (`sidecode --readers`: the fastest decoding of the bench input measured
+// here. siproject reads through OpenEXR's pool instead; README,
+// Performance, says why.) With `half`, samples stored as half are handed over
+// as stored (every band must store half). The first error in row order (a
+// read's or consume's) stops every thread and is rethrown; consume returning
+// false stops the reading after that strip.
+void read_strips(const std::vector<std::string>& paths, long strip, int threads, bool half,
+                 const std::function<bool(const Strip&)>& consume);
 
 // Reads a whole image as float.
 Image read_image(const std::string& path);
