@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cctype>
 #include <condition_variable>
+#include <deque>
 #include <exception>
 #include <mutex>
 #include <thread>
@@ -177,8 +178,8 @@ void read_strips(const std::vector<std::string>& paths, long strip, int threads,
   bool parallel = false;
   int T = 1;
   std::size_t values = 0;  // largest strip
+  ExrThreadsOff off;  // for the readers opened here and by the threads
   {
-    ExrThreadsOff off;
     for (const std::string& p : paths) sets[0].push_back(std::make_unique<ImageReader>(p));
     long global = 0;
     for (std::size_t b = 0; b < paths.size(); ++b) {
@@ -193,10 +194,7 @@ void read_strips(const std::vector<std::string>& paths, long strip, int threads,
     T = int(std::clamp<long>(threads, 1, std::max<std::size_t>(1, jobs.size())));
     parallel = T > 1 && std::all_of(sets[0].begin(), sets[0].end(),
                                     [](const auto& r) { return r->format_name() == "openexr"; });
-    for (int t = 1; parallel && t < T; ++t) {
-      sets.emplace_back();
-      for (const std::string& p : paths) sets.back().push_back(std::make_unique<ImageReader>(p));
-    }
+    if (parallel) sets.resize(T);  // the others' readers are opened by their threads, at once
   }
   std::mutex m;
   std::condition_variable cv;
@@ -208,47 +206,87 @@ void read_strips(const std::vector<std::string>& paths, long strip, int threads,
     if (i < limit || (i == limit && !error)) limit = i, error = e;
     cv.notify_all();
   };
+  // Each thread decodes its strips (t, t + T, ...) into up to `ahead`
+  // slots of its own and hands them on when their turn comes; while it
+  // waits for a turn it decodes its next strip, if a slot is free, so that
+  // no thread idles behind another's decoding. (Strips of formats read in
+  // turn: one slot, as their reads wait on each other anyway.)
+  const int ahead = parallel ? 2 : 1;
   auto worker = [&](int t) {
     auto& readers = sets[parallel ? t : 0];
-    Buffer<std::uint16_t> half_rows(half ? values : 0);  // unset: each strip is read into them
-    Buffer<float> float_rows(half ? 0 : values);
-    for (std::size_t i = t; i < jobs.size(); i += T) {
-      const Job& j = jobs[i];
-      ImageReader& r = *readers[j.band];
+    if (readers.empty()) {
       try {
-        if (!parallel) {  // reads in row order, one at a time
-          std::unique_lock<std::mutex> lock(m);
-          cv.wait(lock, [&] { return next_read == i || i >= limit; });
-          if (i >= limit) return;
+        for (const std::string& p : paths) readers.push_back(std::make_unique<ImageReader>(p));
+      } catch (...) {
+        return stop_at(std::size_t(t), std::current_exception());  // its first strip
+      }
+    }
+    std::vector<Buffer<std::uint16_t>> half_rows(ahead);  // unset: each strip is read into them
+    std::vector<Buffer<float>> float_rows(ahead);
+    for (int k = 0; k < ahead; ++k) (half ? half_rows[k].resize(values) : float_rows[k].resize(values));
+    struct Held {
+      std::size_t i;
+      int slot;
+    };
+    std::deque<Held> held;  // decoded, in order
+    std::vector<int> free_slots;
+    for (int k = ahead; k-- > 0;) free_slots.push_back(k);
+    std::size_t next = t;  // this thread's next strip to decode
+    for (;;) {
+      bool turn = false;
+      {
+        std::unique_lock<std::mutex> lock(m);
+        auto can_read = [&] {
+          return next < jobs.size() && next < limit && !free_slots.empty() &&
+                 (parallel || next_read == next);
+        };
+        cv.wait(lock, [&] {
+          return (!held.empty() && (next_consume == held.front().i || held.front().i >= limit)) ||
+                 can_read() || (held.empty() && (next >= jobs.size() || next >= limit));
+        });
+        if (!held.empty() && held.front().i >= limit) return;
+        if (held.empty() && !can_read()) return;  // nothing left
+        turn = !held.empty() && next_consume == held.front().i;
+      }
+      if (!turn) {  // decode the next strip
+        const Job& j = jobs[next];
+        const int slot = free_slots.back();
+        try {
+          if (half)
+            readers[j.band]->read_rows_half(j.y0, j.y1, half_rows[slot].data());
+          else
+            readers[j.band]->read_rows(j.y0, j.y1, float_rows[slot].data());
+        } catch (...) {  // the strips held before it are still handed on
+          stop_at(next, std::current_exception());
+          next = jobs.size();
+          continue;
         }
-        if (half)
-          r.read_rows_half(j.y0, j.y1, half_rows.data());
-        else
-          r.read_rows(j.y0, j.y1, float_rows.data());
+        free_slots.pop_back();
+        held.push_back({next, slot});
         if (!parallel) {
           std::lock_guard<std::mutex> lock(m);
           ++next_read;
           cv.notify_all();
         }
-      } catch (...) {
-        return stop_at(i, std::current_exception());
+        next += T;
+        continue;
       }
-      {
-        std::unique_lock<std::mutex> lock(m);
-        cv.wait(lock, [&] { return next_consume == i || i >= limit; });
-        if (i >= limit) return;
-      }
+      const Held h = held.front();
+      const Job& j = jobs[h.i];
       bool more;
       try {
         more = consume(Strip{j.band, &paths[j.band], j.y0, j.y1, j.global,
-                             half ? half_rows.data() : nullptr, half ? nullptr : float_rows.data()});
+                             half ? half_rows[h.slot].data() : nullptr,
+                             half ? nullptr : float_rows[h.slot].data()});
       } catch (...) {
-        return stop_at(i, std::current_exception());
+        return stop_at(h.i, std::current_exception());
       }
+      held.pop_front();
+      free_slots.push_back(h.slot);
       {
         std::lock_guard<std::mutex> lock(m);
-        next_consume = i + 1;
-        if (!more && i + 1 <= limit) limit = i + 1, error = nullptr;  // before later strips' errors
+        next_consume = h.i + 1;
+        if (!more && h.i + 1 <= limit) limit = h.i + 1, error = nullptr;  // before later strips' errors
         cv.notify_all();
       }
       if (!more) return;

@@ -101,18 +101,19 @@ long decode_strip_rows(const ImageReader& reader);
 
 // Reads row bands of one image (`paths`, in row order) in strips of `strip`
 // rows on `threads` threads and calls consume(s) for every strip, one call
-// at a time and in row order, on the thread that decoded the strip: while
-// one thread uses a strip, the others decode the next ones. OpenEXR files
-// are decoded by every thread at once, each through a reader of its own
-// with OpenEXR's thread pool off (OpenImageIO's exr_threads -1 while they
-// open), so a strip's samples are used from the cache of the core that
-// wrote them; other formats are read by one thread at a time, in order.
-// (`sidecode --readers`: the fastest decoding of the bench input measured
-// here. siproject reads through OpenEXR's pool instead; README,
-// Performance, says why.) With `half`, samples stored as half are handed over
-// as stored (every band must store half). The first error in row order (a
-// read's or consume's) stops every thread and is rethrown; consume returning
-// false stops the reading after that strip.
+// at a time and in row order, on the thread that decoded the strip. OpenEXR
+// files are decoded by every thread at once, each through readers of its
+// own (opened on that thread) with OpenEXR's thread pool off (OpenImageIO's
+// exr_threads -1 during the call), so a strip's samples are used from the
+// cache of the core that wrote them; a thread holds up to two decoded
+// strips, decoding its next one while it waits for its turn. Other formats
+// are read by one thread at a time, in order, a strip per thread. With
+// `half`, samples stored as half are handed over as stored (every band must
+// store half). The first error in row order (a read's or consume's) stops
+// every thread after the strips before it are handed on, and is rethrown;
+// consume returning false stops the reading after that strip.
+// (`sidecode --readers`. siproject reads through OpenEXR's pool instead:
+// README, Performance, says why.)
 void read_strips(const std::vector<std::string>& paths, long strip, int threads, bool half,
                  const std::function<bool(const Strip&)>& consume);
 
