@@ -22,8 +22,9 @@ the table reports the median wall time and the largest peak resident set:
                  conversion to float (what a reader asking for float pays)
   decode, a reader per core  sidecode --readers N (N = cores): OpenEXR
                  decoded on N threads, each with a reader of its own and
-                 OpenEXR's pool off; not how siproject reads, the fastest
-                 decoding measured here (information, not the target's floor)
+                 OpenEXR's pool off; not how siproject reads: the fastest
+                 in-order decoding measured here (information, not the
+                 target's floor)
   oiiotool       --resize:filter=F WxH, F = box triangle mitchell bspline lanczos3
   splineops      least-squares spline resize, degrees 1 and 3
                  (scripts/splineops_resize.py)
@@ -445,7 +446,7 @@ def md_text(rows, meta, threads, micro):
              f"stored as siproject reads them (the targets' floor), OpenImageIO's serial "
              f"conversion to float is the row below it, and below that the same file decoded "
              f"by a reader per core with OpenEXR's pool off (sidecode --readers; not how "
-             f"siproject reads: the fastest decoding measured here, for information); "
+             f"siproject reads: the fastest in-order decoding measured here, for information); "
              f"{meta['runs']} round(s), each running every competitor once in turn; "
              f"wall = median over the rounds (min-max beside it), CPU = median user+system "
              f"time (less sensitive to other load than wall); peak memory = largest "

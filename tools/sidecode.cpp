@@ -3,8 +3,8 @@
 // half are read as they are stored, without conversion), and does nothing
 // else. With --readers N, decodes instead on N threads, each through a
 // reader of its own with OpenEXR's thread pool off (read_strips): the
-// fastest way to decode an OpenEXR file measured here, which siproject
-// does not use.
+// fastest way measured here to decode an OpenEXR file in row order, which
+// siproject does not use.
 #include <CLI/CLI.hpp>
 
 #include <cstdint>
