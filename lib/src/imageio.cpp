@@ -223,7 +223,12 @@ void read_strips(const std::vector<std::string>& paths, long strip, int threads,
     }
     std::vector<Buffer<std::uint16_t>> half_rows(ahead);  // unset: each strip is read into them
     std::vector<Buffer<float>> float_rows(ahead);
-    for (int k = 0; k < ahead; ++k) (half ? half_rows[k].resize(values) : float_rows[k].resize(values));
+    for (int k = 0; k < ahead; ++k) {
+      if (half)
+        half_rows[k].resize(values);
+      else
+        float_rows[k].resize(values);
+    }
     struct Held {
       std::size_t i;
       int slot;
