@@ -175,27 +175,24 @@ void read_strips(const std::vector<std::string>& paths, long strip, int threads,
   // One set of readers per thread when every band is OpenEXR (any strip can
   // be read at any time), else one set that the threads take in turn.
   std::vector<std::vector<std::unique_ptr<ImageReader>>> sets(1);
-  bool parallel = false;
-  int T = 1;
   std::size_t values = 0;  // largest strip
   ExrThreadsOff off;  // for the readers opened here and by the threads
-  {
-    for (const std::string& p : paths) sets[0].push_back(std::make_unique<ImageReader>(p));
-    long global = 0;
-    for (std::size_t b = 0; b < paths.size(); ++b) {
-      const ImageReader& r = *sets[0][b];
-      if (half && !r.stores_half())
-        throw std::logic_error(r.path() + ": read_strips() with half on samples not stored as half");
-      for (long y = 0; y < r.height(); y += strip)
-        jobs.push_back({b, y, std::min(r.height(), y + strip), global + y});
-      global += r.height();
-      values = std::max(values, std::size_t(std::min(strip, r.height())) * r.width() * r.channels());
-    }
-    T = int(std::clamp<long>(threads, 1, std::max<std::size_t>(1, jobs.size())));
-    parallel = T > 1 && std::all_of(sets[0].begin(), sets[0].end(),
-                                    [](const auto& r) { return r->format_name() == "openexr"; });
-    if (parallel) sets.resize(T);  // the others' readers are opened by their threads, at once
+  for (const std::string& p : paths) sets[0].push_back(std::make_unique<ImageReader>(p));
+  long global = 0;
+  for (std::size_t b = 0; b < paths.size(); ++b) {
+    const ImageReader& r = *sets[0][b];
+    if (half && !r.stores_half())
+      throw std::logic_error(r.path() + ": read_strips() with half on samples not stored as half");
+    for (long y = 0; y < r.height(); y += strip)
+      jobs.push_back({b, y, std::min(r.height(), y + strip), global + y});
+    global += r.height();
+    values = std::max(values, std::size_t(std::min(strip, r.height())) * r.width() * r.channels());
   }
+  const int T = int(std::clamp<long>(threads, 1, std::max<std::size_t>(1, jobs.size())));
+  const bool parallel = T > 1 && std::all_of(sets[0].begin(), sets[0].end(), [](const auto& r) {
+    return r->format_name() == "openexr";
+  });
+  if (parallel) sets.resize(T);  // the others' readers are opened by their threads, at once
   std::mutex m;
   std::condition_variable cv;
   std::size_t next_read = 0, next_consume = 0;
