@@ -188,10 +188,10 @@ void LocalRange::open(long y0, long y1) {
     return v;
   };
   if (min_.data.empty()) {  // here, not in the constructor: a caller may overlap this with reading
-    min_ = Image(width_, height_, channels_);
-    max_ = Image(width_, height_, channels_);
-    std::fill(min_.data.begin(), min_.data.end(), std::numeric_limits<float>::infinity());
-    std::fill(max_.data.begin(), max_.data.end(), -std::numeric_limits<float>::infinity());
+    // unset: close() writes every pixel of an output row once its last input
+    // row is in, so no serial fill first touches these pages
+    min_ = Image(width_, height_, channels_, kUnset);
+    max_ = Image(width_, height_, channels_, kUnset);
   }
   open_y0_ = y0;
   strip_targets_.assign(y1 - y0, {});

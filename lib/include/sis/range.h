@@ -39,7 +39,8 @@ class LocalRange {
   void open(long y0, long y1);
   void fold(long y, long k0, long k1, const float* values);
   void close(long y1);
-  // The ranges (empty before the first rows are added).
+  // The ranges: empty before the first rows are added; an output row's
+  // pixels are set once its last input row is added (unset before).
   const Image& min() const { return min_; }
   const Image& max() const { return max_; }
 
