@@ -11,10 +11,12 @@
 #include <iostream>
 #include <vector>
 
+#include "cli.h"
 #include "sis/imageio.h"
 
 namespace {
-constexpr int kExitUsage = 2, kExitInput = 3;
+using sis::cli::kExitUsage;
+using sis::cli::kExitInput;
 }
 
 int main(int argc, char** argv) {
@@ -30,14 +32,7 @@ int main(int argc, char** argv) {
                  "decode an OpenEXR file on N threads, each with a reader of its own and "
                  "OpenEXR's thread pool off, in strips of about 1 MB (not as siproject reads)")
       ->check(CLI::Range(1, 256));
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "sidecode: " << e.what() << "\n(run sidecode --help for the options)\n";
-    return kExitUsage;
-  }
+  if (const auto code = sis::cli::parse(app, argc, argv)) return *code;
   try {
     sis::ImageReader reader(input);
     const bool half = reader.stores_half() && !as_float;

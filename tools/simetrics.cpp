@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "cli.h"
 #include "sis/imageio.h"
 #include "sis/hex_lattice.h"
 #include "sis/metrics.h"
@@ -21,7 +22,8 @@ using namespace sis;
 
 namespace {
 
-constexpr int kExitUsage = 2, kExitInput = 3;
+using sis::cli::kExitUsage;
+using sis::cli::kExitInput;
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -301,14 +303,7 @@ int main(int argc, char** argv) {
                  "points per output pixel and axis where the closed form is compared")
       ->check(CLI::PositiveNumber)->capture_default_str();
   app.add_flag("--json", o.json, "print one JSON object instead of 'key value' lines");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "simetrics: " << e.what() << "\n(run simetrics --help for the options)\n";
-    return kExitUsage;
-  }
+  if (const auto code = sis::cli::parse(app, argc, argv)) return *code;
   try {
     return run(o);
   } catch (const UsageError& e) {

@@ -20,6 +20,7 @@
 #include <sstream>
 #include <thread>
 
+#include "cli.h"
 #include "sis/hex_projection.h"
 #include "sis/imageio.h"
 #include "sis/prefetch.h"
@@ -31,7 +32,9 @@ using namespace sis;
 
 namespace {
 
-constexpr int kExitUsage = 2, kExitInput = 3, kExitOutput = 4;
+using sis::cli::kExitUsage;
+using sis::cli::kExitInput;
+using sis::cli::kExitOutput;
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -677,14 +680,7 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_flag("-v,--verbose", o.verbose, "print sizes and the time of each stage");
   app.add_flag("-q,--quiet", o.quiet, "print nothing but errors");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "siproject: " << e.what() << "\n(run siproject --help for the options)\n";
-    return kExitUsage;
-  }
+  if (const auto code = sis::cli::parse(app, argc, argv)) return *code;
   o.generator_given = g->count() > 0;
   o.method_given = m->count() > 0;
   o.boundary_given = b->count() > 0;
