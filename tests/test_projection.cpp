@@ -3,9 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <thread>
+
+#include <atomic>
 #include <cmath>
 #include <functional>
 #include <random>
+#include <thread>
 
 #include "sis/projection.h"
 #include "support.h"
@@ -176,6 +180,79 @@ TEST(Acquisition, BitIdenticalForAnyStripAndThreadCount) {
         a.add_rows(y, std::min(in.height, y + strip), in.row(y));
       EXPECT_EQ(a.finish().c.data, ref.c.data) << threads << " " << strip;
     }
+}
+
+TEST(Acquisition, BandsMatchTheDirectSumAndGiveTheSameBitsInAnyOrder) {
+  // Bands of 1, 3 and 16 rows: coefficient rows whose input rows lie in
+  // up to a dozen bands (periodic: bands at both ends). In order (any strip
+  // and thread count), and band by band on two threads at once in
+  // decreasing order: the same bits; against the direct sum: rounding.
+  const long W = 9, H = 7, win = 23, hin = 41;
+  const Image in = random_image(win, hin, 3, 17);
+  for (const Kernel& k : {Kernel::bspline(3), Kernel::mitchell()})
+    for (Boundary b : kRules)
+      for (long band_rows : {1L, 3L, 16L}) {
+        const Method m = k.is_bspline() ? Method::MinError : Method::Conventional;
+        const AcquisitionPlan plan(win, hin, 3, W, H, Lattice::cartesian(), k, b, m, band_rows);
+        ASSERT_EQ(plan.bands().count(), (hin + band_rows - 1) / band_rows);
+        const Coefficients ref = acquire(in, plan, 1);
+        SCOPED_TRACE(k.name() + " " + boundary_name(b) + ", bands of " + std::to_string(band_rows));
+        const double dx = double(W) / win, dy = double(H) / hin;
+        for (long n2 = 0; n2 < H; ++n2)
+          for (long n1 = 0; n1 < W; ++n1)
+            for (int c = 0; c < 3; ++c) {
+              double num = 0, wsum = 0;
+              for (long j = -3 * hin; j < 4 * hin; ++j)
+                for (long i = -3 * win; i < 4 * win; ++i) {
+                  const double w = k.eval((i + 0.5) * dx - (n1 + 0.5)) * k.eval((j + 0.5) * dy - (n2 + 0.5));
+                  if (w == 0) continue;
+                  num += w * in.at(extend_index(i, win, b), extend_index(j, hin, b), c);
+                  wsum += w;
+                }
+              EXPECT_NEAR(ref.c.at(n1, n2, c), m == Method::MinError ? num * dx * dy : num / wsum, 1e-12);
+            }
+        for (int threads : {2, 3}) {
+          Acquisition a(plan, threads);
+          for (long y = 0; y < hin; y += 5) a.add_rows(y, std::min(hin, y + 5), in.row(y));
+          EXPECT_EQ(a.finish().c.data, ref.c.data) << threads << " threads in order";
+        }
+        Acquisition a(plan);
+        const BandPartition& bands = plan.bands();
+        std::atomic<long> next{bands.count() - 1};
+        auto worker = [&] {
+          Acquisition::Band band(a);
+          for (long n; (n = next--) >= 0;) {
+            band.begin(n);
+            for (long y = bands.begin(n); y < bands.end(n); y += 2)
+              band.add_rows(y, std::min(bands.end(n), y + 2), in.row(y));
+            band.end();
+          }
+        };
+        std::thread other(worker);
+        worker();
+        other.join();
+        EXPECT_EQ(a.finish().c.data, ref.c.data) << "bands at once";
+      }
+}
+
+TEST(Acquisition, BandsMustBeTakenWhole) {
+  const Image in = random_image(8, 12, 1, 1);
+  const AcquisitionPlan plan(8, 12, 1, 4, 6, Lattice::cartesian(), Kernel::bspline(1),
+                             Boundary::Mirror, Method::MinError, 4);
+  Acquisition a(plan);
+  Acquisition::Band band(a);
+  EXPECT_THROW(band.add_rows(0, 2, in.row(0)), std::logic_error);  // no band begun
+  EXPECT_THROW(band.begin(3), std::logic_error);                   // bands 0, 1, 2
+  band.begin(1);
+  EXPECT_THROW(band.begin(2), std::logic_error);                   // band 1 not ended
+  EXPECT_THROW(band.add_rows(0, 2, in.row(0)), std::logic_error);  // not band 1's rows
+  band.add_rows(4, 6, in.row(4));
+  EXPECT_THROW(band.end(), std::logic_error);                      // rows 6, 7 missing
+  EXPECT_THROW(band.add_rows(6, 9, in.row(6)), std::logic_error);  // past the band
+  band.add_rows(6, 8, in.row(6));
+  band.end();
+  EXPECT_THROW(band.begin(1), std::logic_error);                   // taken before
+  EXPECT_THROW(a.finish(), std::logic_error);                      // bands 0 and 2 missing
 }
 
 TEST(Acquisition, EveryPathGivesTheSameBits) {

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <set>
 #include <random>
 #include <thread>
 
@@ -270,10 +271,11 @@ TEST_F(Siproject, HalfOutputNeverHoldsInfinities) {
 }
 
 TEST_F(Siproject, BitIdenticalForAnyThreadCount) {
-  write_image(path("in.exr"), random_image(301, 203, 3, 3));
+  // 603 rows: three bands of the acquisition (kBandRows), taken at once
+  write_image(path("in.exr"), random_image(301, 603, 3, 3));
   Buffer<float> first;
   for (int t : {1, 2, 3}) {
-    ASSERT_EQ(run(path("in.exr") + " -o " + path("out.exr") + " --size 97x61 -q --threads " +
+    ASSERT_EQ(run(path("in.exr") + " -o " + path("out.exr") + " --size 97x201 -q --threads " +
                   std::to_string(t)).status, 0);
     const Image img = read_image(path("out.exr"));
     if (first.empty()) first = img.data;
@@ -543,6 +545,140 @@ TEST_F(Siproject, ReadStripsHandsEveryStripOnceInRowOrder) {
         EXPECT_EQ(seen.most_inside, 1);
         EXPECT_EQ(seen.values, want);
       }
+  }
+}
+
+TEST_F(Siproject, ReadBandsTakesEveryBandOnceWholeAndInOrder) {
+  // Two files (37 and 50 rows) in bands of 16 rows of the 87, strips of 5:
+  // each band begun, its strips in row order (cut at the file's and the
+  // band's ends, whole strips of the file's rows otherwise), ended, all on
+  // one worker; the rows a single reader reads. PNG: one worker.
+  const Image a = random_image(23, 37, 3, 21), b = random_image(23, 50, 3, 22);
+  write_half(path("a.exr"), a);
+  write_half(path("b.exr"), b);
+  write_image(path("fa.exr"), a);
+  write_image(path("fb.exr"), b);
+  write_image(path("a.png"), a);
+  write_image(path("b.png"), b);
+  const BandPartition bands(87, 16);
+  for (const std::string kind : {"half", "float", "png"}) {
+    const std::vector<std::string> paths =
+        kind == "half"    ? std::vector<std::string>{path("a.exr"), path("b.exr")}
+        : kind == "float" ? std::vector<std::string>{path("fa.exr"), path("fb.exr")}
+                          : std::vector<std::string>{path("a.png"), path("b.png")};
+    std::vector<float> want;
+    for (const std::string& p : paths) {
+      ImageReader r(p);
+      std::vector<float> rows(std::size_t(r.width()) * r.height() * 3);
+      r.read_rows(0, r.height(), rows.data());
+      want.insert(want.end(), rows.begin(), rows.end());
+    }
+    const bool half = kind == "half";
+    for (int workers : kind == "png" ? std::vector<int>{1} : std::vector<int>{1, 2, 3}) {
+      SCOPED_TRACE(kind + ", " + std::to_string(workers) + " workers");
+      std::mutex m;
+      std::vector<std::vector<std::string>> log(bands.count());  // per band: what its worker saw
+      std::vector<long> next(bands.count(), -1);                 // per band: its next row
+      std::vector<float> got(want.size(), -7.0f);
+      BandCallbacks cb;
+      cb.begin = [&](int t, long n) {
+        std::lock_guard<std::mutex> lock(m);
+        log[n].push_back("begin " + std::to_string(t));
+        next[n] = bands.begin(n);
+      };
+      cb.strip = [&](int t, const Strip& s) {
+        const long n = bands.of(s.global);
+        EXPECT_EQ(s.global, s.y0 + (s.band == 1 ? 37 : 0));
+        EXPECT_EQ(*s.path, paths[s.band]);
+        EXPECT_LE(s.global + s.y1 - s.y0, bands.end(n));
+        // cut only at the file's strips of 5 rows, the band's ends and the file's end
+        EXPECT_TRUE(s.y0 % 5 == 0 || s.global == bands.begin(n)) << "strip from " << s.y0;
+        EXPECT_TRUE(s.y1 % 5 == 0 || s.global + s.y1 - s.y0 == bands.end(n) ||
+                    s.y1 == (s.band == 0 ? 37 : 50))
+            << "strip to " << s.y1;
+        EXPECT_EQ(s.y0 / 5, (s.y1 - 1) / 5) << "within one strip of the file";
+        const std::size_t n0 = std::size_t(s.global) * 23 * 3, count = std::size_t(s.y1 - s.y0) * 23 * 3;
+        if (half)
+          half_to_float(s.half, got.data() + n0, count);
+        else
+          std::copy(s.floats, s.floats + count, got.begin() + n0);
+        std::lock_guard<std::mutex> lock(m);
+        EXPECT_EQ(s.global, next[n]) << "strips in row order";
+        next[n] = s.global + s.y1 - s.y0;
+        log[n].push_back("strip " + std::to_string(t));
+        return true;
+      };
+      cb.end = [&](int t, long n) {
+        std::lock_guard<std::mutex> lock(m);
+        EXPECT_EQ(next[n], bands.end(n)) << "band " << n << " whole";
+        log[n].push_back("end " + std::to_string(t));
+      };
+      EXPECT_EQ(read_bands(paths, bands, 5, workers, half, cb), -1);
+      EXPECT_EQ(got, want);
+      for (long n = 0; n < bands.count(); ++n) {
+        ASSERT_GE(log[n].size(), 3u) << "band " << n;
+        const std::string t = log[n].front().substr(6);
+        EXPECT_EQ(log[n].front(), "begin " + t);
+        EXPECT_EQ(log[n].back(), "end " + t);
+        for (std::size_t i = 1; i + 1 < log[n].size(); ++i) EXPECT_EQ(log[n][i], "strip " + t);
+      }
+    }
+  }
+}
+
+TEST_F(Siproject, ReadBandsStopsAfterTheFirstBandThatFails) {
+  write_half(path("in.exr"), random_image(16, 100, 3, 23));
+  write_half(path("cut.exr"), random_image(256, 256, 3, 24));
+  fs::resize_file(path("cut.exr"), fs::file_size(path("cut.exr")) / 2);
+  const BandPartition bands(100, 10);
+  for (int workers : {1, 2, 3}) {
+    SCOPED_TRACE(std::to_string(workers) + " workers");
+    std::mutex m;
+    std::set<long> ended;
+    BandCallbacks cb;
+    cb.begin = [](int, long) {};
+    cb.end = [&](int, long n) {
+      std::lock_guard<std::mutex> lock(m);
+      ended.insert(n);
+    };
+    // Bands that fail, and every band before them ended; a later band ends
+    // only if another worker finished it before the failure.
+    auto ended_before = [&](long fails) {
+      for (long n = 0; n < fails; ++n) EXPECT_EQ(ended.count(n), 1u) << "band " << n;
+      EXPECT_EQ(ended.count(fails), 0u) << "band " << fails;
+      ended.clear();
+    };
+    // an error in band 4: rethrown
+    cb.strip = [&](int, const Strip& s) {
+      if (s.global == 45) throw std::runtime_error("band 4");
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      return true;
+    };
+    EXPECT_THROW(read_bands({path("in.exr")}, bands, 5, workers, true, cb), std::runtime_error);
+    ended_before(4);
+    // band 6 says stop: no error, the band returned
+    cb.strip = [&](int, const Strip& s) { return s.global != 60; };
+    EXPECT_EQ(read_bands({path("in.exr")}, bands, 5, workers, true, cb), 6);
+    ended_before(6);
+    // errors in bands 3 and 7 (band 7's thrown first): band 3's rethrown
+    cb.strip = [&](int, const Strip& s) {
+      if (s.global == 70) throw std::runtime_error("band 7");
+      if (s.global == 35) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        throw std::logic_error("band 3");
+      }
+      return true;
+    };
+    EXPECT_THROW(read_bands({path("in.exr")}, bands, 5, workers, true, cb), std::logic_error);
+    ended_before(3);
+    // a band that cannot be read: InputError naming the file
+    cb.strip = [](int, const Strip&) { return true; };
+    try {
+      read_bands({path("cut.exr")}, BandPartition(256, 32), 16, workers, true, cb);
+      ADD_FAILURE() << "no error from a truncated file";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("cut.exr"), std::string::npos) << e.what();
+    }
   }
 }
 

@@ -2,8 +2,10 @@
 // theory, the step response's overshoot, and the range remedies.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <random>
+#include <thread>
 
 #include "sis/projection.h"
 #include "sis/range.h"
@@ -62,6 +64,36 @@ TEST(LocalRange, MatchesBruteForceAtAnyRatio) {
     }
     EXPECT_EQ(split.min().data, lr.min().data);
     EXPECT_EQ(split.max().data, lr.max().data);
+    // in bands of 1 and 4 rows (an output row's input rows in several
+    // bands): in order, and the bands at once on two threads in decreasing
+    // order, in strips of 3
+    for (long band_rows : {1L, 4L}) {
+      LocalRange ordered(win, hin, C, W, H, band_rows);
+      ordered.add_rows(0, hin, in.row(0));
+      EXPECT_EQ(ordered.min().data, lr.min().data) << band_rows;
+      EXPECT_EQ(ordered.max().data, lr.max().data) << band_rows;
+      LocalRange banded(win, hin, C, W, H, band_rows);
+      const BandPartition bands(hin, band_rows);
+      std::atomic<long> next{bands.count() - 1};
+      auto worker = [&] {
+        LocalRange::Band band(banded);
+        for (long b; (b = next--) >= 0;) {
+          band.begin(b);
+          for (long y0 = bands.begin(b); y0 < bands.end(b); y0 += 3) {
+            const long y1 = std::min(bands.end(b), y0 + 3);
+            band.open(y0, y1);
+            for (long y = y0; y < y1; ++y) band.fold(y, 0, values, in.row(y));
+            band.close(y1);
+          }
+          band.end();
+        }
+      };
+      std::thread other(worker);
+      worker();
+      other.join();
+      EXPECT_EQ(banded.min().data, lr.min().data) << band_rows;
+      EXPECT_EQ(banded.max().data, lr.max().data) << band_rows;
+    }
     // per axis: the samples inside the pixel's interval, or the nearest one
     auto inside = [](long i, long samples, long count, long p) {
       const double x = (i + 0.5) * count / samples;

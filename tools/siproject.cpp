@@ -179,6 +179,123 @@ class ReadAhead {
   std::thread thread_;  // last: starts once the members above are ready
 };
 
+// The first non-finite sample read (in row order) and how many there were.
+struct NonFinite {
+  long count = 0, x = -1, y = -1;
+  int c = -1;
+  std::string file;
+};
+
+// Values [k0, k1) of a row as float in v (converted from `half_row` when
+// given, else already there): false when one is not finite.
+bool row_values(const std::uint16_t* half_row, long k0, long k1, float* v) {
+  const std::size_t n = std::size_t(k1 - k0);
+  return half_row ? half_to_float(half_row + k0, v, n) : all_finite(v, n);
+}
+
+// Zeroes the non-finite values of v[0, n) (values k0... of their row); returns
+// how many, the first's index in *first.
+long zero_nonfinite(float* v, std::size_t n, long k0, long* first) {
+  long count = 0;
+  for (std::size_t q = 0; q < n; ++q)
+    if (!std::isfinite(v[q])) {
+      if (count++ == 0) *first = k0 + long(q);
+      v[q] = 0.0f;
+    }
+  return count;
+}
+
+// Reads and acquires the image on the Cartesian lattice band by band
+// (read_bands): with OpenEXR inputs each worker thread decodes its band's
+// strips and sums them while they are in its cache, into a band of the
+// acquisition and of the local range of its own; other formats are read by
+// one thread, the sums split among the threads by columns. `paths` in row
+// order. Stops at the first band with a non-finite sample when `stop`.
+NonFinite acquire_bands(const std::vector<std::string>& paths, const ImageReader& first,
+                        bool half, int threads, bool stop, const std::function<void(float*, std::size_t, std::size_t)>& compress,
+                        Acquisition& acquisition, LocalRange& local, const BandPartition& bands,
+                        const std::function<void(double)>& progress) {
+  const bool exr = std::all_of(paths.begin(), paths.end(), [&](const std::string& p) {
+    return p == first.path() ? first.format_name() == "openexr" : ImageReader(p).format_name() == "openexr";
+  });
+  const int workers = exr ? int(std::min<long>(threads, bands.count())) : 1;
+  // A worker's own decoding: strips of about 1 MB, in its cache; OpenEXR's
+  // pool (one worker): strips of several of its blocks, one per pool thread.
+  const long strip = workers > 1 ? decode_strip_rows(first) : first.preferred_strip();
+  const std::size_t row_size = std::size_t(first.width()) * first.channels();
+  struct Worker {
+    std::unique_ptr<Acquisition::Band> acquisition;
+    std::unique_ptr<LocalRange::Band> range;
+    std::vector<std::atomic<long>> bad, bad_first;  // per strip row (pieces of a row run at once)
+    explicit Worker(long rows) : bad(rows), bad_first(rows) {}
+  };
+  std::vector<std::unique_ptr<Worker>> w;
+  for (int t = 0; t < workers; ++t) {
+    w.push_back(std::make_unique<Worker>(strip));
+    w.back()->acquisition = std::make_unique<Acquisition::Band>(acquisition, workers > 1 ? 1 : threads);
+    w.back()->range = std::make_unique<LocalRange::Band>(local);
+  }
+  std::vector<NonFinite> bad(bands.count());  // per band, each written by the thread taking it
+  std::mutex progress_mutex;
+  long rows_done = 0;
+  BandCallbacks cb;
+  cb.begin = [&](int t, long b) {
+    w[t]->acquisition->begin(b);
+    w[t]->range->begin(b);
+  };
+  cb.strip = [&](int t, const Strip& s) {
+    Worker& k = *w[t];
+    const long y = s.global, rows = s.y1 - s.y0, y1 = y + rows;
+    for (long r = 0; r < rows; ++r) k.bad[r] = 0, k.bad_first[r] = LONG_MAX;
+    k.range->open(y, y1);
+    k.acquisition->add_rows(y, y1, [&](long gy, long k0, long k1, float* scratch) {
+      const long r = gy - y;
+      // the block a later call will ask for
+      if (half)
+        prefetch_ahead(s.half, r, rows, row_size, k0, k1);
+      else
+        prefetch_ahead(s.floats, r, rows, row_size, k0, k1);
+      float* v = half ? scratch : s.floats + r * row_size + k0;
+      if (!row_values(half ? s.half + r * row_size : nullptr, k0, k1, v)) {
+        long first_bad = -1;
+        k.bad[r] += zero_nonfinite(v, std::size_t(k1 - k0), k0, &first_bad);
+        long seen = k.bad_first[r].load();
+        while (first_bad < seen && !k.bad_first[r].compare_exchange_weak(seen, first_bad)) {
+        }
+      }
+      k.range->fold(gy, k0, k1, v);
+      if (compress) compress(v, std::size_t(k1 - k0), std::size_t(k0));
+      return static_cast<const float*>(v);
+    });
+    k.range->close(y1);
+    NonFinite& n = bad[bands.of(y)];
+    for (long r = 0; r < rows; ++r) {
+      if (k.bad[r] && n.count == 0) {
+        n.c = int(k.bad_first[r] % long(first.channels()));
+        n.x = k.bad_first[r] / long(first.channels());
+        n.y = s.y0 + r;
+        n.file = *s.path;
+      }
+      n.count += k.bad[r];
+    }
+    return !(stop && n.count);
+  };
+  cb.end = [&](int t, long b) {
+    w[t]->acquisition->end();
+    w[t]->range->end();
+    std::lock_guard<std::mutex> lock(progress_mutex);
+    rows_done += bands.end(b) - bands.begin(b);
+    progress(double(rows_done) / bands.rows());
+  };
+  read_bands(paths, bands, strip, workers, half, cb);
+  NonFinite all;
+  for (const NonFinite& n : bad) {
+    if (n.count && all.count == 0) all = n;
+    else all.count += n.count;
+  }
+  return all;
+}
+
 int run(const Options& o) {
   const auto t_start = Clock::now();
   const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
@@ -371,6 +488,23 @@ int run(const Options& o) {
     std::unique_ptr<Acquisition> cartesian;
     std::unique_ptr<HexAcquisitionPlan> hex_plan;
     std::unique_ptr<HexAcquisition> hexagonal;
+    NonFinite bad;
+    if (!hex) {
+      const auto t = Clock::now();
+      plan = std::make_unique<AcquisitionPlan>(win, hin, C, double(W), double(H),
+                                               Lattice::cartesian(), generator, boundary, method);
+      cartesian = std::make_unique<Acquisition>(*plan, threads);
+      local = std::make_unique<LocalRange>(win, hin, C, W, H, plan->bands().band_rows());
+      std::vector<std::string> paths;
+      for (const auto& r : readers) paths.push_back(r->path());
+      std::function<void(float*, std::size_t, std::size_t)> compress;
+      if (compressed)
+        compress = [&](float* v, std::size_t n, std::size_t k0) { for_colour(v, n, highlight_compress, k0); };
+      Progress progress(!o.quiet, "reading and acquiring");
+      bad = acquire_bands(paths, reader, half, threads, o.nonfinite == "error", compress, *cartesian,
+                          *local, plan->bands(), [&](double f) { progress.update(f); });
+      t_acquire = seconds_since(t);
+    } else {
     // The rows as chunks of the bands (one band for one input), in order.
     struct Chunk {
       ImageReader* reader;
@@ -387,25 +521,21 @@ int run(const Options& o) {
       }
       g += r->height();
     }
-    // Samples stored as half are read as they are and converted here, piece
-    // by piece on the worker threads (OpenImageIO's conversion is serial and
-    // slower than decoding). Strips are read on a thread of their own into
-    // two slots: the next strip decodes while this one is acquired. (A third
-    // slot measured no faster on two cores, and costs a strip of memory.)
+    // Samples stored as half are read as they are and converted here, on
+    // the worker threads (OpenImageIO's conversion is serial and slower than
+    // decoding). Strips are read on a thread of their own into two slots:
+    // the next strip decodes while this one is acquired.
     const std::size_t row_size = std::size_t(win) * C;
     const int slots = 2;
     std::vector<Buffer<std::uint16_t>> half_rows(slots);  // unset: each strip is read into them
     std::vector<Buffer<float>> float_rows(slots);
     for (int b = 0; b < slots; ++b) {
       if (half) half_rows[b].resize(strip * row_size);
-      if (!half || hex) float_rows[b].resize(strip * row_size);
+      float_rows[b].resize(strip * row_size);
     }
-    // Per strip row: its non-finite samples (pieces of a row are checked at
-    // once on different threads).
-    std::vector<std::atomic<long>> bad(strip), bad_first(strip);
-    long nonfinite = 0, first_x = -1, first_y = -1;
-    int first_c = -1;
-    std::string first_file;
+    // Per strip row: its non-finite samples (rows are checked at once on
+    // different threads).
+    std::vector<long> strip_bad(strip), strip_bad_first(strip);
     {
       Progress progress(!o.quiet, "reading and acquiring");
       const auto t = Clock::now();
@@ -417,99 +547,67 @@ int run(const Options& o) {
           ch.reader->read_rows(ch.y0, ch.y1, float_rows[b].data());
       };
       ReadAhead ahead(chunks.size(), slots, read);
-      // The plans (the weights of every input row and column, some
-      // milliseconds) are made while the first strips decode.
-      if (hex) {
-        const HexLayout layout =
-            hex_layout(o.density, double(W), double(H), hex_default_margin(hex_order));
-        hex_plan = std::make_unique<HexAcquisitionPlan>(win, hin, C, double(W), double(H), layout,
-                                                        hex_order, boundary, quadrature);
-        hexagonal = std::make_unique<HexAcquisition>(*hex_plan, threads);
-      } else {
-        plan = std::make_unique<AcquisitionPlan>(win, hin, C, double(W), double(H),
-                                                 Lattice::cartesian(), generator, boundary, method);
-        cartesian = std::make_unique<Acquisition>(*plan, threads);
-      }
+      // The plan (the weights of every input row and column, some
+      // milliseconds) is made while the first strips decode.
+      const HexLayout layout =
+          hex_layout(o.density, double(W), double(H), hex_default_margin(hex_order));
+      hex_plan = std::make_unique<HexAcquisitionPlan>(win, hin, C, double(W), double(H), layout,
+                                                      hex_order, boundary, quadrature);
+      hexagonal = std::make_unique<HexAcquisition>(*hex_plan, threads);
       local = std::make_unique<LocalRange>(win, hin, C, W, H);
       for (std::size_t i = 0; i < chunks.size(); ++i) {
         const Chunk& ch = chunks[i];
         const long y = ch.global, y1 = ch.global + ch.y1 - ch.y0;
         const int b = ahead.wait(i);  // rethrows a read error
         const long rows = y1 - y;
-        for (long r = 0; r < rows; ++r) bad[r] = 0, bad_first[r] = LONG_MAX;
-        // Values [k0, k1) of strip row r as float, in v: non-finite samples
-        // zeroed (and counted), ...
-        auto check = [&](long r, long k0, long k1, float* v) {
-          const std::size_t n = std::size_t(k1 - k0);
-          if (half ? half_to_float(half_rows[b].data() + r * row_size + k0, v, n) : all_finite(v, n))
-            return;
-          long count = 0, first = -1;
-          for (std::size_t q = 0; q < n; ++q)
-            if (!std::isfinite(v[q])) {
-              if (count++ == 0) first = k0 + long(q);
-              v[q] = 0.0f;
-            }
-          bad[r] += count;
-          long seen = bad_first[r].load();
-          while (first < seen && !bad_first[r].compare_exchange_weak(seen, first)) {
+        float* data = float_rows[b].data();
+        const long values = long(row_size);
+        // Non-finite samples zeroed (and counted), ...
+        parallel_for(rows, threads, [&](long r0, long r1) {
+          for (long r = r0; r < r1; ++r) {
+            float* v = data + r * row_size;
+            strip_bad[r] = 0;
+            if (!row_values(half ? half_rows[b].data() + r * row_size : nullptr, 0, values, v))
+              strip_bad[r] = zero_nonfinite(v, row_size, 0, &strip_bad_first[r]);
           }
-        };
+        });
         // ... then their local range taken and highlights compressed.
-        auto finish = [&](long r, long k0, long k1, float* v) {
-          local->fold(y + r, k0, k1, v);
-          if (compressed) for_colour(v, std::size_t(k1 - k0), highlight_compress, std::size_t(k0));
-        };
         local->open(y, y1);
-        if (hex) {
-          float* data = float_rows[b].data();
-          const long values = long(row_size);
-          parallel_for(rows, threads, [&](long r0, long r1) {
-            for (long r = r0; r < r1; ++r) check(r, 0, values, data + r * row_size);
-          });
-          parallel_for(values, threads, [&](long k0, long k1) {
-            for (long r = 0; r < rows; ++r) finish(r, k0, k1, data + r * row_size + k0);
-          });
-          hexagonal->add_rows(y, y1, data);
-        } else {
-          cartesian->add_rows(y, y1, [&](long gy, long k0, long k1, float* scratch) {
-            const long r = gy - y;
-            // the block a later call will ask for
-            if (half)
-              prefetch_ahead(half_rows[b].data(), r, rows, row_size, k0, k1);
-            else
-              prefetch_ahead(float_rows[b].data(), r, rows, row_size, k0, k1);
-            float* v = half ? scratch : float_rows[b].data() + r * row_size + k0;
-            check(r, k0, k1, v);
-            finish(r, k0, k1, v);
-            return static_cast<const float*>(v);
-          });
-        }
-        local->close(y1);
-        for (long r = 0; r < rows; ++r) {
-          if (bad[r] && nonfinite == 0) {
-            first_c = int(bad_first[r] % C);
-            first_x = bad_first[r] / long(C);
-            first_y = ch.y0 + r;
-            first_file = ch.reader->path();
+        parallel_for(values, threads, [&](long k0, long k1) {
+          for (long r = 0; r < rows; ++r) {
+            float* v = data + r * row_size + k0;
+            local->fold(y + r, k0, k1, v);
+            if (compressed) for_colour(v, std::size_t(k1 - k0), highlight_compress, std::size_t(k0));
           }
-          nonfinite += bad[r];
+        });
+        local->close(y1);
+        hexagonal->add_rows(y, y1, data);
+        for (long r = 0; r < rows; ++r) {
+          if (strip_bad[r] && bad.count == 0) {
+            bad.c = int(strip_bad_first[r] % C);
+            bad.x = strip_bad_first[r] / long(C);
+            bad.y = ch.y0 + r;
+            bad.file = ch.reader->path();
+          }
+          bad.count += strip_bad[r];
         }
         ahead.release(i);
-        if (nonfinite && o.nonfinite == "error") break;
+        if (bad.count && o.nonfinite == "error") break;
         progress.update(double(y1) / hin);
       }
       t_acquire = seconds_since(t);
     }
+    }
     readers.clear();  // frees the decoders' buffers before the later stages
-    if (nonfinite) {
+    if (bad.count) {
       std::ostringstream m;
-      m << first_file << ": non-finite sample (NaN or Inf) at x " << first_x << ", y " << first_y
-        << ", channel " << (first_c < int(names.size()) ? names[first_c] : std::to_string(first_c));
+      m << bad.file << ": non-finite sample (NaN or Inf) at x " << bad.x << ", y " << bad.y
+        << ", channel " << (bad.c < int(names.size()) ? names[bad.c] : std::to_string(bad.c));
       if (o.nonfinite == "error") {
         m << "; use --nonfinite zero to replace them with 0";
         throw InputError(m.str());
       }
-      if (!o.quiet) std::cerr << "siproject: warning: replaced " << nonfinite << " non-finite samples with 0; first: " << m.str() << "\n";
+      if (!o.quiet) std::cerr << "siproject: warning: replaced " << bad.count << " non-finite samples with 0; first: " << m.str() << "\n";
     }
     k = hex ? hexagonal->finish() : cartesian->finish();
     const auto t = Clock::now();

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sis/parallel.h"
 #include "sis/prefetch.h"
 
 namespace sis {
@@ -78,7 +79,8 @@ auto in_memory(long y0, long y1, const T* rows, std::size_t row_size) {
 
 AcquisitionPlan::AcquisitionPlan(long input_width, long input_height, int channels,
                                  double image_width, double image_height, const Lattice& lattice,
-                                 const Kernel& generator, Boundary boundary, Method method)
+                                 const Kernel& generator, Boundary boundary, Method method,
+                                 long band_rows)
     : channels_(channels),
       image_w_(image_width),
       image_h_(image_height),
@@ -100,66 +102,166 @@ AcquisitionPlan::AcquisitionPlan(long input_width, long input_height, int channe
                          method);
   wy_ = acquisition_axis(1, extent[1], input_height, image_height, lattice, generator, boundary,
                          method);
+  bands_ = BandPartition(input_height, band_rows < 1 ? kBandRows : band_rows);
 }
 
 Acquisition::Acquisition(const AcquisitionPlan& plan, int threads)
-    : plan_(plan),
-      threads_(threads < 1 ? 1 : threads),
-      cursor_(plan.coefficients_y()),
-      sums_(plan.coefficients_y()) {
-  for (long n = 0; n < plan.coefficients_y(); ++n) cursor_[n] = plan.weights_y().begin(n);
+    : plan_(plan), threads_(threads < 1 ? 1 : threads), ended_(plan.bands().count(), 0) {
+  const AxisWeights& wy = plan.weights_y();
+  const BandPartition& bands = plan.bands();
+  // Unset: the horizontal passes write every row but those that no input
+  // row reaches, zeroed here (their pages are first touched by the threads,
+  // not by a serial fill).
+  acc_ = Grid<double>(plan.coefficients_x(), plan.coefficients_y(), plan.channels(), kUnset);
+  std::vector<std::vector<long>> row_bands(plan.coefficients_y());
+  for (long n = 0; n < plan.coefficients_y(); ++n) {
+    if (wy.begin(n) == wy.end(n)) std::fill(acc_.row(n), acc_.row(n) + acc_.row_size(), 0.0);
+    for (long e = wy.begin(n); e < wy.end(n); ++e) {  // increasing rows, so increasing bands
+      const long b = bands.of(wy.index[e]);
+      if (row_bands[n].empty() || row_bands[n].back() != b) row_bands[n].push_back(b);
+    }
+  }
+  slots_ = BandSlots<double>(row_bands, bands.count(), acc_.row_size());
 }
+
+Acquisition::~Acquisition() = default;
 
 void Acquisition::add_rows(long y0, long y1, const float* rows) {
   const std::size_t row_size = std::size_t(plan_.input_width()) * plan_.channels();
-  add<float>(y0, y1, in_memory(y0, y1, rows, row_size));
+  add_in_order<float>(y0, y1, in_memory(y0, y1, rows, row_size));
 }
 void Acquisition::add_rows(long y0, long y1, const double* rows) {
   const std::size_t row_size = std::size_t(plan_.input_width()) * plan_.channels();
-  add<double>(y0, y1, in_memory(y0, y1, rows, row_size));
+  add_in_order<double>(y0, y1, in_memory(y0, y1, rows, row_size));
 }
-void Acquisition::add_rows(long y0, long y1, const PieceSource& piece) { add<float>(y0, y1, piece); }
-
-// The horizontal pass of the complete rows, targets [n0, n1) of part `part`.
-void Acquisition::filter_complete(long part, long parts) {
-  const long ncx = plan_.coefficients_x();
-  const long n0 = ncx * part / parts, n1 = ncx * (part + 1) / parts;
-  for (long m : complete_)
-    apply_weights(plan_.weights_x(), sums_of(m), plan_.channels(), n0, n1, acc_.row(m));
+void Acquisition::add_rows(long y0, long y1, const PieceSource& piece) {
+  add_in_order<float>(y0, y1, piece);
 }
 
-// Row m's vertical sum, at the first 64-byte boundary of its buffer.
-double* Acquisition::sums_of(long m) { return aligned(sums_[m].data()); }
-
-void Acquisition::release_complete() {
-  for (long m : complete_) spare_.push_back(std::move(sums_[m]));
-  complete_.clear();
-}
-
-// piece(y, k0, k1, scratch) -> const T*: values [k0, k1) of input row y.
+// Rows in order: band after band, each ended as its last row comes.
 template <typename T, typename Piece>
-void Acquisition::add(long y0, long y1, const Piece& piece) {
+void Acquisition::add_in_order(long y0, long y1, const Piece& piece) {
   if (y0 != next_row_ || y1 < y0 || y1 > plan_.input_height()) {
     std::ostringstream m;
     m << "Acquisition::add_rows(): rows [" << y0 << ", " << y1 << ") out of order (next row "
       << next_row_ << " of " << plan_.input_height() << ")";
     throw std::logic_error(m.str());
   }
-  const long values = plan_.input_width() * plan_.channels();
-  const AxisWeights& wy = plan_.weights_y();
-  if (acc_.data.empty()) {  // here, not in the constructor: a caller may overlap this with reading
-    // Unset: the horizontal pass writes every row but those that no input
-    // row reaches, zeroed here (their pages are first touched by the
-    // threads, not by a serial fill).
-    acc_ = Grid<double>(plan_.coefficients_x(), plan_.coefficients_y(), plan_.channels(), kUnset);
-    for (long n = 0; n < plan_.coefficients_y(); ++n)
-      if (wy.begin(n) == wy.end(n)) std::fill(acc_.row(n), acc_.row(n) + acc_.row_size(), 0.0);
+  if (!in_order_) in_order_ = std::make_unique<Band>(*this, threads_);
+  for (long y = y0; y < y1;) {
+    if (in_order_->band_ < 0) in_order_->begin(plan_.bands().of(y));
+    const long e = std::min(y1, in_order_->y1_);
+    in_order_->add<T>(y, e, piece);
+    if (e == in_order_->y1_) in_order_->end();
+    y = e;
   }
+  next_row_ = y1;
+}
+
+Coefficients Acquisition::finish() {
+  const long ended = std::count(ended_.begin(), ended_.end(), 1);
+  if (ended != long(ended_.size())) {
+    std::ostringstream m;
+    m << "Acquisition::finish(): only " << ended << " of " << ended_.size()
+      << " bands of rows were added (next row " << next_row_ << " of " << plan_.input_height()
+      << ")";
+    throw std::logic_error(m.str());
+  }
+  in_order_.reset();
+  slots_ = BandSlots<double>();
+  Coefficients out;
+  out.c = std::move(acc_);
+  out.lattice = plan_.lattice();
+  out.generator = plan_.generator();
+  out.boundary = plan_.boundary();
+  out.min_error = plan_.method() == Method::MinError;
+  out.image_width = plan_.image_width();
+  out.image_height = plan_.image_height();
+  return out;
+}
+
+Acquisition::Band::Band(Acquisition& whole, int threads)
+    : whole_(whole),
+      threads_(threads < 1 ? 1 : threads),
+      cursor_(whole.plan_.coefficients_y()),
+      first_(whole.plan_.coefficients_y()),
+      end_(whole.plan_.coefficients_y()),
+      dest_(whole.plan_.coefficients_y()),
+      sums_(whole.plan_.coefficients_y()) {}
+
+Acquisition::Band::~Band() = default;
+
+void Acquisition::Band::begin(long band) {
+  const AcquisitionPlan& plan = whole_.plan_;
+  if (band_ >= 0 || band < 0 || band >= plan.bands().count() || whole_.ended_[band]) {
+    std::ostringstream m;
+    m << "Acquisition::Band::begin(" << band << "): "
+      << (band_ >= 0 ? "band " + std::to_string(band_) + " not ended"
+                     : band < 0 || band >= plan.bands().count() ? "no such band" : "band taken before");
+    throw std::logic_error(m.str());
+  }
+  band_ = band;
+  y0_ = next_row_ = plan.bands().begin(band);
+  y1_ = plan.bands().end(band);
+  const AxisWeights& wy = plan.weights_y();
+  active_.clear();
+  for (long n = 0; n < plan.coefficients_y(); ++n) {
+    const long* rows = wy.index.data();
+    const long e0 = std::lower_bound(rows + wy.begin(n), rows + wy.end(n), y0_) - rows;
+    const long e1 = std::lower_bound(rows + e0, rows + wy.end(n), y1_) - rows;
+    if (e0 == e1) continue;
+    active_.push_back(n);
+    cursor_[n] = first_[n] = e0;
+    end_[n] = e1;
+    double* slot = whole_.slots_.slot(n, band);
+    dest_[n] = slot ? slot : whole_.acc_.row(n);
+  }
+}
+
+void Acquisition::Band::add_rows(long y0, long y1, const float* rows) {
+  const std::size_t row_size = std::size_t(whole_.plan_.input_width()) * whole_.plan_.channels();
+  add<float>(y0, y1, in_memory(y0, y1, rows, row_size));
+}
+void Acquisition::Band::add_rows(long y0, long y1, const PieceSource& piece) { add<float>(y0, y1, piece); }
+
+// The horizontal pass of the complete rows, targets [n0, n1) of part `part`.
+void Acquisition::Band::filter_complete(long part, long parts) {
+  const AcquisitionPlan& plan = whole_.plan_;
+  const long ncx = plan.coefficients_x();
+  const long n0 = ncx * part / parts, n1 = ncx * (part + 1) / parts;
+  for (long m : complete_)
+    apply_weights(plan.weights_x(), sums_of(m), plan.channels(), n0, n1, dest_[m]);
+}
+
+// Row m's vertical sum, at the first 64-byte boundary of its buffer.
+double* Acquisition::Band::sums_of(long m) { return aligned(sums_[m].data()); }
+
+void Acquisition::Band::release_complete() {
+  for (long m : complete_) spare_.push_back(std::move(sums_[m]));
+  complete_.clear();
+}
+
+// piece(y, k0, k1, scratch) -> const T*: values [k0, k1) of input row y.
+template <typename T, typename Piece>
+void Acquisition::Band::add(long y0, long y1, const Piece& piece) {
+  const AcquisitionPlan& plan = whole_.plan_;
+  if (band_ < 0 || y0 != next_row_ || y1 < y0 || y1 > y1_) {
+    std::ostringstream m;
+    m << "Acquisition::Band::add_rows(): rows [" << y0 << ", " << y1 << ") ";
+    if (band_ < 0)
+      m << "outside a band (begin() first)";
+    else
+      m << "out of order (next row " << next_row_ << " of band " << band_ << ", rows [" << y0_
+        << ", " << y1_ << "))";
+    throw std::logic_error(m.str());
+  }
+  const long values = plan.input_width() * plan.channels();
+  const AxisWeights& wy = plan.weights_y();
 
   // Per row of the strip: the coefficient rows it adds to (their vertical
-  // sums and weights), those it starts last (its term is their first:
-  // assigned, not added, so reused sum buffers need no zeroing); rows summed
-  // to the end here are filtered in the next call.
+  // sums and weights), those it starts last (its term is their first in
+  // the band: assigned, not added, so reused sum buffers need no zeroing);
+  // rows summed to the band's end here are filtered in the next call.
   const long nrows = y1 - y0;
   if (long(rows_.size()) < nrows) rows_.resize(nrows);
   for (long r = 0; r < nrows; ++r) {
@@ -170,9 +272,9 @@ void Acquisition::add(long y0, long y1, const Piece& piece) {
     t.start_weights.clear();
   }
   std::vector<long> completed;
-  for (long n = 0; n < plan_.coefficients_y(); ++n) {
+  for (long n : active_) {
     long e = cursor_[n];
-    if (e == wy.end(n) || wy.index[e] >= y1) continue;
+    if (e == end_[n] || wy.index[e] >= y1) continue;
     if (sums_[n].empty()) {
       if (spare_.empty()) {
         sums_[n].resize(values + 64 / sizeof(double));
@@ -181,14 +283,14 @@ void Acquisition::add(long y0, long y1, const Piece& piece) {
         spare_.pop_back();
       }
     }
-    for (; e < wy.end(n) && wy.index[e] < y1; ++e) {
+    for (; e < end_[n] && wy.index[e] < y1; ++e) {
       RowTargets& t = rows_[wy.index[e] - y0];
-      const bool start = e == wy.begin(n);
+      const bool start = e == first_[n];
       (start ? t.start_sums : t.sums).push_back(sums_of(n));
       (start ? t.start_weights : t.weights).push_back(wy.weight[e]);
     }
     cursor_[n] = e;
-    if (e == wy.end(n)) completed.push_back(n);
+    if (e == end_[n]) completed.push_back(n);
   }
   // The started sums after the others; then runs of up to kGroup rows that
   // add to the same sums, the later ones starting none, go to the vertical
@@ -213,7 +315,7 @@ void Acquisition::add(long y0, long y1, const Piece& piece) {
   auto split = [&](long part) { return part == parts ? values : values * part / parts / kAlign * kAlign; };
   const std::size_t room = (kGroup * kBlock * sizeof(T) + 64) / sizeof(double);  // a part's pieces
   if (scratch_.size() < parts * room) scratch_.resize(parts * room);
-  parallel_for(parts, threads_, [&](long p0, long p1) {
+  auto run = [&](long p0, long p1) {
     T* scratch = aligned(reinterpret_cast<T*>(scratch_.data() + p0 * room));
     for (long part = p0; part < p1; ++part) {
       filter_complete(part, parts);
@@ -234,33 +336,42 @@ void Acquisition::add(long y0, long y1, const Piece& piece) {
         }
       }
     }
-  });
+  };
+  if (parts == 1)
+    run(0, 1);
+  else
+    parallel_for(parts, threads_, run);
   release_complete();
   complete_ = std::move(completed);
   next_row_ = y1;
 }
 
-Coefficients Acquisition::finish() {
-  if (next_row_ != plan_.input_height()) {
+void Acquisition::Band::end() {
+  if (band_ < 0 || next_row_ != y1_) {
     std::ostringstream m;
-    m << "Acquisition::finish(): only " << next_row_ << " of " << plan_.input_height()
-      << " rows were added";
+    m << "Acquisition::Band::end(): ";
+    if (band_ < 0)
+      m << "no band begun";
+    else
+      m << "band " << band_ << " has rows [" << y0_ << ", " << y1_ << "), added up to " << next_row_;
     throw std::logic_error(m.str());
   }
-  parallel_for(threads_, threads_, [&](long p0, long p1) {
-    for (long part = p0; part < p1; ++part) filter_complete(part, threads_);
-  });
+  if (threads_ == 1) {
+    filter_complete(0, 1);
+  } else {
+    parallel_for(threads_, threads_, [&](long p0, long p1) {
+      for (long part = p0; part < p1; ++part) filter_complete(part, threads_);
+    });
+  }
   release_complete();
-  spare_.clear();
-  Coefficients out;
-  out.c = std::move(acc_);
-  out.lattice = plan_.lattice();
-  out.generator = plan_.generator();
-  out.boundary = plan_.boundary();
-  out.min_error = plan_.method() == Method::MinError;
-  out.image_width = plan_.image_width();
-  out.image_height = plan_.image_height();
-  return out;
+  const long b = band_;
+  band_ = -1;
+  whole_.ended_[b] = 1;
+  Grid<double>& acc = whole_.acc_;
+  whole_.slots_.ended(b, [&](long n, const double* slot) {
+    double* row = acc.row(n);
+    for (std::size_t q = 0; q < acc.row_size(); ++q) row[q] += slot[q];
+  });
 }
 
 namespace {

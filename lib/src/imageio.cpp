@@ -5,11 +5,14 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
+#include <climits>
 #include <condition_variable>
 #include <deque>
 #include <exception>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <cmath>
 #include <filesystem>
@@ -299,6 +302,88 @@ void read_strips(const std::vector<std::string>& paths, long strip, int threads,
   worker(0);
   for (auto& h : helpers) h.join();
   if (error) std::rethrow_exception(error);
+}
+
+long read_bands(const std::vector<std::string>& paths, const BandPartition& bands, long strip,
+                int workers, bool half, const BandCallbacks& cb) {
+  if (strip < 1) throw std::invalid_argument("read_bands(): strip < 1");
+  const int T = int(std::clamp<long>(workers, 1, std::max(1L, bands.count())));
+  std::optional<ExrThreadsOff> off;  // for the readers opened here and by the threads
+  if (T > 1) off.emplace();
+  std::vector<std::vector<std::unique_ptr<ImageReader>>> sets(T);
+  for (const std::string& p : paths) sets[0].push_back(std::make_unique<ImageReader>(p));
+  std::vector<long> start(1, 0);  // each file's first row in the image
+  std::size_t values = 0;         // largest strip
+  for (const auto& r : sets[0]) {
+    if (T > 1 && r->format_name() != "openexr")
+      throw std::logic_error(r->path() + ": read_bands() with several workers on a file not OpenEXR");
+    if (half && !r->stores_half())
+      throw std::logic_error(r->path() + ": read_bands() with half on samples not stored as half");
+    start.push_back(start.back() + r->height());
+    values = std::max(values, std::size_t(std::min(strip, r->height())) * r->width() * r->channels());
+  }
+  if (start.back() != bands.rows())
+    throw std::logic_error("read_bands(): the files hold " + std::to_string(start.back()) +
+                           " rows, the bands " + std::to_string(bands.rows()));
+  std::atomic<long> next{0};
+  std::atomic<long> stop{LONG_MAX};  // the first band stopped so far
+  auto stop_at = [&](long b) {
+    long s = stop.load();
+    while (b < s && !stop.compare_exchange_weak(s, b)) {
+    }
+  };
+  std::mutex m;
+  long error_band = LONG_MAX;
+  std::exception_ptr error;
+  auto worker = [&](int t) {
+    auto& readers = sets[t];
+    Buffer<std::uint16_t> half_rows(half ? values : 0);  // unset: each strip is read into them
+    Buffer<float> float_rows(half ? 0 : values);
+    for (;;) {
+      const long b = next++;
+      if (b >= bands.count() || b > stop.load()) return;
+      try {
+        if (readers.empty())
+          for (const std::string& p : paths) readers.push_back(std::make_unique<ImageReader>(p));
+        cb.begin(t, b);
+        bool whole = true;
+        for (long y = bands.begin(b); y < bands.end(b);) {
+          if (b > stop.load()) return;  // an earlier band stopped
+          const std::size_t f = std::upper_bound(start.begin(), start.end(), y) - start.begin() - 1;
+          const long y0 = y - start[f];
+          const long y1 = std::min({bands.end(b) - start[f], start[f + 1] - start[f], (y0 / strip + 1) * strip});
+          if (half)
+            readers[f]->read_rows_half(y0, y1, half_rows.data());
+          else
+            readers[f]->read_rows(y0, y1, float_rows.data());
+          if (!cb.strip(t, Strip{f, &paths[f], y0, y1, y, half ? half_rows.data() : nullptr,
+                                 half ? nullptr : float_rows.data()})) {
+            whole = false;
+            break;
+          }
+          y = start[f] + y1;
+        }
+        if (!whole) {
+          stop_at(b);
+          return;
+        }
+        cb.end(t, b);
+      } catch (...) {
+        {
+          std::lock_guard<std::mutex> lock(m);
+          if (b < error_band) error_band = b, error = std::current_exception();
+        }
+        stop_at(b);
+        return;
+      }
+    }
+  };
+  std::vector<std::thread> helpers;
+  for (int t = 1; t < T; ++t) helpers.emplace_back(worker, t);
+  worker(0);
+  for (auto& h : helpers) h.join();
+  if (error && error_band <= stop.load()) std::rethrow_exception(error);
+  return stop.load() == LONG_MAX ? -1 : stop.load();
 }
 
 std::string sample_format_name(SampleFormat f) { return f == SampleFormat::Half ? "half" : "float"; }

@@ -67,11 +67,27 @@ std::string clamp_name(Clamp c) {
   return c == Clamp::None ? "none" : c == Clamp::Zero ? "zero" : "local";
 }
 
-LocalRange::LocalRange(long input_width, long input_height, int channels, long width, long height)
-    : win_(input_width), width_(width), height_(height), channels_(channels) {
+LocalRange::LocalRange(long input_width, long input_height, int channels, long width, long height,
+                       long band_rows)
+    : win_(input_width),
+      hin_(input_height),
+      width_(width),
+      height_(height),
+      channels_(channels),
+      bands_(input_height, band_rows) {
   pixel_ranges(input_width, width, x_begin_, x_end_);
   pixel_ranges(input_height, height, y_begin_, y_end_);
+  std::vector<std::vector<long>> row_bands(height);
+  for (long o = 0; o < height; ++o)
+    for (long b = bands_.of(y_begin_[o]); b <= bands_.of(y_end_[o] - 1); ++b) row_bands[o].push_back(b);
+  slots_ = BandSlots<float>(row_bands, bands_.count(), 2 * std::size_t(width) * channels);
+  // unset: the bands write every pixel of an output row, so no serial fill
+  // first touches these pages
+  min_ = Image(width, height, channels, kUnset);
+  max_ = Image(width, height, channels, kUnset);
 }
+
+LocalRange::~LocalRange() = default;
 
 namespace {
 // out[k] = min(out[k], in[k]) (Min = false: max), elementwise: v < o ? v : o,
@@ -179,31 +195,47 @@ void across(const float* row, const long* xb, const long* xe, long width, long s
 }
 }  // namespace
 
-void LocalRange::open(long y0, long y1) {
-  const std::size_t values = std::size_t(win_) * channels_;
+LocalRange::Band::Band(LocalRange& whole) : whole_(whole) {}
+LocalRange::Band::~Band() = default;
+
+void LocalRange::Band::begin(long band) {
+  LocalRange& w = whole_;
+  if (band_ >= 0 || band < 0 || band >= w.bands_.count())
+    throw std::logic_error("LocalRange::Band::begin(" + std::to_string(band) + "): " +
+                           (band_ >= 0 ? "band " + std::to_string(band_) + " not ended" : "no such band"));
+  band_ = band;
+  y0_ = next_row_ = w.bands_.begin(band);
+  y1_ = w.bands_.end(band);
+  // the first output row that takes input rows from here on (they are in
+  // order of their input rows)
+  next_open_ = std::upper_bound(w.y_end_.begin(), w.y_end_.end(), y0_) - w.y_end_.begin();
+}
+
+void LocalRange::Band::open(long y0, long y1) {
+  LocalRange& w = whole_;
+  if (band_ < 0 || y0 != next_row_ || y1 < y0 || y1 > y1_)
+    throw std::logic_error("LocalRange: rows [" + std::to_string(y0) + ", " + std::to_string(y1) +
+                           ") opened out of order or outside the band");
+  const std::size_t values = std::size_t(w.win_) * w.channels_;
   auto columns = [&] {
     if (spare_.empty()) return std::vector<float>(values);
     std::vector<float> v = std::move(spare_.back());
     spare_.pop_back();
     return v;
   };
-  if (min_.data.empty()) {  // here, not in the constructor: a caller may overlap this with reading
-    // unset: close() writes every pixel of an output row once its last input
-    // row is in, so no serial fill first touches these pages
-    min_ = Image(width_, height_, channels_, kUnset);
-    max_ = Image(width_, height_, channels_, kUnset);
-  }
   open_y0_ = y0;
   strip_targets_.assign(y1 - y0, {});
-  // output rows are in order of their input rows
-  for (; next_open_ < height_ && y_begin_[next_open_] < y1; ++next_open_)
+  for (; next_open_ < w.height_ && w.y_begin_[next_open_] < y1; ++next_open_)
     open_.push_back({next_open_, columns(), columns()});
-  for (Open& o : open_)
-    for (long y = std::max(y0, y_begin_[o.row]); y < std::min(y1, y_end_[o.row]); ++y)
-      strip_targets_[y - y0].push_back({o.lo.data(), o.hi.data(), y == y_begin_[o.row]});
+  for (Open& o : open_) {
+    const long first = std::max(y0_, w.y_begin_[o.row]);
+    for (long y = std::max(y0, first); y < std::min(y1, w.y_end_[o.row]); ++y)
+      strip_targets_[y - y0].push_back({o.lo.data(), o.hi.data(), y == first});
+  }
+  next_row_ = y1;
 }
 
-void LocalRange::fold(long y, long k0, long k1, const float* values) {
+void LocalRange::Band::fold(long y, long k0, long k1, const float* values) {
   for (const Target& t : strip_targets_[y - open_y0_]) {
     if (t.first) {
       std::copy(values, values + (k1 - k0), t.lo + k0);
@@ -215,26 +247,66 @@ void LocalRange::fold(long y, long k0, long k1, const float* values) {
   }
 }
 
-void LocalRange::close(long y1) {
-  const long W = min_.width;
+void LocalRange::Band::close(long y1) {
+  LocalRange& w = whole_;
+  const long W = w.width_;
+  auto done = [&](const Open& o) { return std::min(w.y_end_[o.row], y1_) <= y1; };
   for (Open& o : open_)
-    if (y_end_[o.row] <= y1) {
-      across<true>(o.lo.data(), x_begin_.data(), x_end_.data(), W, win_, channels_, min_.row(o.row));
-      across<false>(o.hi.data(), x_begin_.data(), x_end_.data(), W, win_, channels_, max_.row(o.row));
+    if (done(o)) {
+      float* slot = w.slots_.slot(o.row, band_);
+      float* lo = slot ? slot : w.min_.row(o.row);
+      float* hi = slot ? slot + w.min_.row_size() : w.max_.row(o.row);
+      across<true>(o.lo.data(), w.x_begin_.data(), w.x_end_.data(), W, w.win_, w.channels_, lo);
+      across<false>(o.hi.data(), w.x_begin_.data(), w.x_end_.data(), W, w.win_, w.channels_, hi);
       spare_.push_back(std::move(o.lo));
       spare_.push_back(std::move(o.hi));
     }
-  open_.erase(std::remove_if(open_.begin(), open_.end(),
-                             [&](const Open& o) { return y_end_[o.row] <= y1; }),
-              open_.end());
+  open_.erase(std::remove_if(open_.begin(), open_.end(), done), open_.end());
   strip_targets_.clear();
+}
+
+void LocalRange::Band::end() {
+  LocalRange& w = whole_;
+  if (band_ < 0 || next_row_ != y1_ || !open_.empty())
+    throw std::logic_error("LocalRange::Band::end(): band " + std::to_string(band_) +
+                           " not begun or not complete");
+  const long b = band_;
+  band_ = -1;
+  const std::size_t n = w.min_.row_size();
+  w.slots_.ended(b, [&](long o, const float* slot) {
+    float* lo = w.min_.row(o);
+    float* hi = w.max_.row(o);
+    for (std::size_t q = 0; q < n; ++q) {
+      lo[q] = slot[q] < lo[q] ? slot[q] : lo[q];
+      hi[q] = slot[n + q] > hi[q] ? slot[n + q] : hi[q];
+    }
+  });
+}
+
+void LocalRange::open(long y0, long y1) {
+  if (!in_order_) in_order_ = std::make_unique<Band>(*this);
+  if (in_order_->band_ < 0 && y0 < hin_) in_order_->begin(bands_.of(y0));
+  in_order_->open(y0, y1);
+}
+
+void LocalRange::fold(long y, long k0, long k1, const float* values) {
+  in_order_->fold(y, k0, k1, values);
+}
+
+void LocalRange::close(long y1) {
+  in_order_->close(y1);
+  if (y1 == in_order_->y1_) in_order_->end();
 }
 
 void LocalRange::add_rows(long y0, long y1, const float* rows) {
   const long values = win_ * channels_;
-  open(y0, y1);
-  for (long y = y0; y < y1; ++y) fold(y, 0, values, rows + std::size_t(y - y0) * values);
-  close(y1);
+  for (long y = y0; y < y1;) {
+    const long e = std::min(y1, bands_.end(bands_.of(y)));
+    open(y, e);
+    for (long r = y; r < e; ++r) fold(r, 0, values, rows + std::size_t(r - y0) * values);
+    close(e);
+    y = e;
+  }
 }
 
 namespace {

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "sis/bands.h"
 #include "sis/image.h"
 
 namespace sis {
@@ -116,6 +117,30 @@ long decode_strip_rows(const ImageReader& reader);
 // README, Performance, says why.)
 void read_strips(const std::vector<std::string>& paths, long strip, int threads, bool half,
                  const std::function<bool(const Strip&)>& consume);
+
+// Reads row bands of one image (`paths`, in row order) band by band, the
+// bands of `bands` over the image's rows: `workers` threads take the bands
+// in increasing order, each band wholly by one thread, in strips of up to
+// `strip` rows (whole strips of each file's rows, cut at the band's and the
+// file's ends). Per band, on the thread that takes it: begin(worker, band),
+// strip(worker, s) for its strips in order, end(worker, band). With several
+// workers every file must be OpenEXR: each worker reads through readers of
+// its own with OpenEXR's thread pool off, so that a strip's samples are used
+// from the cache of the core that decoded them and no worker waits on
+// another's strips; with one, OpenEXR's pool decodes. `half` as read_strips.
+// An error (a read's or a callback's) in band b, or strip() returning false
+// there, stops band b and the later bands not yet ended (their end() is not
+// called; another worker may have ended one already); the bands before b
+// run to their end. The error of the first band that had one is rethrown
+// (when no earlier band stopped); else returns the first band that
+// stopped, or -1. (siproject's reading.)
+struct BandCallbacks {
+  std::function<void(int worker, long band)> begin;
+  std::function<bool(int worker, const Strip& s)> strip;
+  std::function<void(int worker, long band)> end;
+};
+long read_bands(const std::vector<std::string>& paths, const BandPartition& bands, long strip,
+                int workers, bool half, const BandCallbacks& callbacks);
 
 // Reads a whole image as float.
 Image read_image(const std::string& path);
