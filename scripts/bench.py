@@ -16,15 +16,15 @@ from /usr/bin/time -v), RUNS rounds, each round running every competitor once
 in turn, so that a change in the machine's load falls on all of them alike;
 the table reports the median wall time and the largest peak resident set:
 
-  decode floor   sidecode: reads the input in strips as siproject does, in
-                 its stored sample type (half: no conversion)
+  decode floor   sidecode: reads the input with OpenImageIO in strips of 64
+                 rows through OpenEXR's pool, in its stored sample type
+                 (half: no conversion)
   decode to float  sidecode --as-float: the same through OpenImageIO's
                  conversion to float (what a reader asking for float pays)
-  decode, a reader per core  sidecode --readers N (N = cores): OpenEXR
-                 decoded on N threads, each with a reader of its own and
-                 OpenEXR's pool off; not how siproject reads: the fastest
-                 in-order decoding measured here (information, not the
-                 target's floor)
+  decode as siproject reads  sidecode --readers N (N = cores): OpenEXR
+                 decoded band by band on N threads, each with a reader of
+                 its own and OpenEXR's pool off, as siproject reads it, the
+                 samples not used (information, not the target's floor)
   oiiotool       --resize:filter=F WxH, F = box triangle mitchell bspline lanczos3
   splineops      least-squares spline resize, degrees 1 and 3
                  (scripts/splineops_resize.py)
@@ -83,7 +83,7 @@ SIPROJECT_METHODS = [
 HEADLINE = "siproject min-error cubic 2x2"
 DECODE = "decode floor (sidecode)"
 DECODE_FLOAT = "decode to float (sidecode --as-float)"
-DECODE_READERS = "decode, a reader per core (sidecode --readers {n})"
+DECODE_READERS = "decode as siproject reads, a reader per core (sidecode --readers {n})"
 STARTUP = "start-up floor (sidecode, 16 x 16 input)"
 OIIO_BSPLINE = "oiiotool bspline"
 
@@ -443,10 +443,10 @@ def md_text(rows, meta, threads, micro):
     L.append(f"- output: {meta['out_size']}; every competitor is a whole process "
              f"(read, resize, write a 1-part zip EXR of the input's sample type: half, as "
              f"oiiotool keeps it), timed by wall clock; the decode floor reads the samples as "
-             f"stored as siproject reads them (the targets' floor), OpenImageIO's serial "
+             f"stored with OpenImageIO, in strips through OpenEXR's pool (the targets' floor), OpenImageIO's serial "
              f"conversion to float is the row below it, and below that the same file decoded "
-             f"by a reader per core with OpenEXR's pool off (sidecode --readers; not how "
-             f"siproject reads: the fastest in-order decoding measured here, for information); "
+             f"as siproject reads it, band by band by a reader per core with OpenEXR's pool "
+             f"off, the samples not used (sidecode --readers; for information); "
              f"{meta['runs']} round(s), each running every competitor once in turn; "
              f"wall = median over the rounds (min-max beside it), CPU = median user+system "
              f"time (less sensitive to other load than wall); peak memory = largest "

@@ -26,7 +26,7 @@ assert not left, f"temporary files left: {left}"
 rows = list(csv.DictReader(open(os.path.join(d, "bench-quick.csv"))))
 names = {r["competitor"] for r in rows}
 want = ["decode floor (sidecode)", "decode to float (sidecode --as-float)",
-        f"decode, a reader per core (sidecode --readers {os.cpu_count() or 1})"]
+        f"decode as siproject reads, a reader per core (sidecode --readers {os.cpu_count() or 1})"]
 want += [f"oiiotool {f}" for f in ("box", "triangle", "mitchell", "bspline", "lanczos3")]
 want += [f"splineops least-squares degree {d}" for d in (1, 3)]
 want += ["siproject min-error cubic 2x2", "siproject min-error cubic centred",

@@ -22,10 +22,6 @@ namespace sis {
 
 enum class Method { MinError, Conventional };
 
-// Input rows per band (bands.h) unless a plan is given another count: a
-// band of 8000-sample rows of half RGB is 12 MB of samples.
-constexpr long kBandRows = 256;
-
 // Everything that depends only on sizes and options.
 class AcquisitionPlan {
  public:

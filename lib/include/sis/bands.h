@@ -18,6 +18,11 @@
 
 namespace sis {
 
+// Input rows per band of siproject's acquisition and local range (and of an
+// AcquisitionPlan given no other count): at 8000 samples of half RGB a row,
+// 12 MB of samples, 32 bands; each a few of OpenEXR's zip blocks of 16 rows.
+constexpr long kBandRows = 256;
+
 class BandPartition {
  public:
   BandPartition() = default;

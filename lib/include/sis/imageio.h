@@ -83,7 +83,7 @@ class ImageReader {
   void read(long y0, long y1, SampleFormat type, void* rows);
 };
 
-// A strip that read_strips hands over: rows [y0, y1) of band `band` (0-based
+// A strip that read_bands hands over: rows [y0, y1) of file `band` (0-based
 // in its data window; `path` is its file), rows [global, global + y1 - y0)
 // of the image the bands tile, with its samples as stored: half bits in
 // `half`, or floats in `floats` (writable), width * channels per row.
@@ -95,28 +95,11 @@ struct Strip {
   float* floats;
 };
 
-// Rows per strip for read_strips: about 1 MB of stored samples, whole
+// Rows per strip for read_bands: about 1 MB of stored samples, whole
 // 16-row zip blocks (OpenEXR's largest common block is 32 rows; 16 keeps a
 // strip in the second-level cache of the core that decodes it).
 long decode_strip_rows(const ImageReader& reader);
 
-// Reads row bands of one image (`paths`, in row order) in strips of `strip`
-// rows on `threads` threads and calls consume(s) for every strip, one call
-// at a time and in row order, on the thread that decoded the strip. OpenEXR
-// files are decoded by every thread at once, each through readers of its
-// own (opened on that thread) with OpenEXR's thread pool off (OpenImageIO's
-// exr_threads -1 during the call), so a strip's samples are used from the
-// cache of the core that wrote them; a thread holds up to two decoded
-// strips, decoding its next one while it waits for its turn. Other formats
-// are read by one thread at a time, in order, a strip per thread. With
-// `half`, samples stored as half are handed over as stored (every band must
-// store half). The first error in row order (a read's or consume's) stops
-// every thread after the strips before it are handed on, and is rethrown;
-// consume returning false stops the reading after that strip.
-// (`sidecode --readers`. siproject reads through OpenEXR's pool instead:
-// README, Performance, says why.)
-void read_strips(const std::vector<std::string>& paths, long strip, int threads, bool half,
-                 const std::function<bool(const Strip&)>& consume);
 
 // Reads row bands of one image (`paths`, in row order) band by band, the
 // bands of `bands` over the image's rows: `workers` threads take the bands
@@ -127,7 +110,8 @@ void read_strips(const std::vector<std::string>& paths, long strip, int threads,
 // workers every file must be OpenEXR: each worker reads through readers of
 // its own with OpenEXR's thread pool off, so that a strip's samples are used
 // from the cache of the core that decoded them and no worker waits on
-// another's strips; with one, OpenEXR's pool decodes. `half` as read_strips.
+// another's strips; with one, OpenEXR's pool decodes. With `half`, samples
+// stored as half are handed over as stored (every file must store half).
 // An error (a read's or a callback's) in band b, or strip() returning false
 // there, stops band b and the later bands not yet ended (their end() is not
 // called; another worker may have ended one already); the bands before b
