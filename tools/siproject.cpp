@@ -209,15 +209,20 @@ long zero_nonfinite(float* v, std::size_t n, long k0, long* first) {
 // (read_bands): with OpenEXR inputs each worker thread decodes its band's
 // strips and sums them while they are in its cache, into a band of the
 // acquisition and of the local range of its own; other formats are read by
-// one thread, the sums split among the threads by columns. `paths` in row
-// order. Stops at the first band with a non-finite sample when `stop`.
-NonFinite acquire_bands(const std::vector<std::string>& paths, const ImageReader& first,
-                        bool half, int threads, bool stop, const std::function<void(float*, std::size_t, std::size_t)>& compress,
+// one thread, the sums split among the threads by columns. Stops at the first band with a non-finite sample when `stop`.
+// `readers`: the inputs in row order (their paths and formats).
+NonFinite acquire_bands(const std::vector<std::unique_ptr<ImageReader>>& readers, bool half,
+                        int threads, bool stop,
+                        const std::function<void(float*, std::size_t, std::size_t)>& compress,
                         Acquisition& acquisition, LocalRange& local, const BandPartition& bands,
                         const std::function<void(double)>& progress) {
-  const bool exr = std::all_of(paths.begin(), paths.end(), [&](const std::string& p) {
-    return p == first.path() ? first.format_name() == "openexr" : ImageReader(p).format_name() == "openexr";
-  });
+  const ImageReader& first = *readers.front();
+  std::vector<std::string> paths;
+  bool exr = true;
+  for (const auto& r : readers) {
+    paths.push_back(r->path());
+    exr = exr && r->format_name() == "openexr";
+  }
   const int workers = exr ? int(std::min<long>(threads, bands.count())) : 1;
   // A worker's own decoding: strips of about 1 MB, in its cache; OpenEXR's
   // pool (one worker): strips of several of its blocks, one per pool thread.
@@ -495,108 +500,108 @@ int run(const Options& o) {
                                                Lattice::cartesian(), generator, boundary, method);
       cartesian = std::make_unique<Acquisition>(*plan, threads);
       local = std::make_unique<LocalRange>(win, hin, C, W, H, plan->bands().band_rows());
-      std::vector<std::string> paths;
-      for (const auto& r : readers) paths.push_back(r->path());
       std::function<void(float*, std::size_t, std::size_t)> compress;
       if (compressed)
-        compress = [&](float* v, std::size_t n, std::size_t k0) { for_colour(v, n, highlight_compress, k0); };
+        compress = [&](float* v, std::size_t n, std::size_t k0) {
+          for_colour(v, n, highlight_compress, k0);
+        };
       Progress progress(!o.quiet, "reading and acquiring");
-      bad = acquire_bands(paths, reader, half, threads, o.nonfinite == "error", compress, *cartesian,
+      bad = acquire_bands(readers, half, threads, o.nonfinite == "error", compress, *cartesian,
                           *local, plan->bands(), [&](double f) { progress.update(f); });
       t_acquire = seconds_since(t);
     } else {
-    // The rows as chunks of the bands (one band for one input), in order.
-    struct Chunk {
-      ImageReader* reader;
-      long y0, y1, global;
-    };
-    std::vector<Chunk> chunks;
-    long strip = 0;
-    long g = 0;
-    for (const auto& r : readers) {
-      strip = std::max(strip, r->preferred_strip());
-      for (long y = 0; y < r->height(); y += r->preferred_strip()) {
-        const long y1 = std::min(r->height(), y + r->preferred_strip());
-        chunks.push_back({r.get(), y, y1, g + y});
-      }
-      g += r->height();
-    }
-    // Samples stored as half are read as they are and converted here, on
-    // the worker threads (OpenImageIO's conversion is serial and slower than
-    // decoding). Strips are read on a thread of their own into two slots:
-    // the next strip decodes while this one is acquired.
-    const std::size_t row_size = std::size_t(win) * C;
-    const int slots = 2;
-    std::vector<Buffer<std::uint16_t>> half_rows(slots);  // unset: each strip is read into them
-    std::vector<Buffer<float>> float_rows(slots);
-    for (int b = 0; b < slots; ++b) {
-      if (half) half_rows[b].resize(strip * row_size);
-      float_rows[b].resize(strip * row_size);
-    }
-    // Per strip row: its non-finite samples (rows are checked at once on
-    // different threads).
-    std::vector<long> strip_bad(strip), strip_bad_first(strip);
-    {
-      Progress progress(!o.quiet, "reading and acquiring");
-      const auto t = Clock::now();
-      auto read = [&](std::size_t i, int b) {
-        const Chunk& ch = chunks[i];
-        if (half)
-          ch.reader->read_rows_half(ch.y0, ch.y1, half_rows[b].data());
-        else
-          ch.reader->read_rows(ch.y0, ch.y1, float_rows[b].data());
+      // The rows as chunks of the bands (one band for one input), in order.
+      struct Chunk {
+        ImageReader* reader;
+        long y0, y1, global;
       };
-      ReadAhead ahead(chunks.size(), slots, read);
-      // The plan (the weights of every input row and column, some
-      // milliseconds) is made while the first strips decode.
-      const HexLayout layout =
-          hex_layout(o.density, double(W), double(H), hex_default_margin(hex_order));
-      hex_plan = std::make_unique<HexAcquisitionPlan>(win, hin, C, double(W), double(H), layout,
-                                                      hex_order, boundary, quadrature);
-      hexagonal = std::make_unique<HexAcquisition>(*hex_plan, threads);
-      local = std::make_unique<LocalRange>(win, hin, C, W, H);
-      for (std::size_t i = 0; i < chunks.size(); ++i) {
-        const Chunk& ch = chunks[i];
-        const long y = ch.global, y1 = ch.global + ch.y1 - ch.y0;
-        const int b = ahead.wait(i);  // rethrows a read error
-        const long rows = y1 - y;
-        float* data = float_rows[b].data();
-        const long values = long(row_size);
-        // Non-finite samples zeroed (and counted), ...
-        parallel_for(rows, threads, [&](long r0, long r1) {
-          for (long r = r0; r < r1; ++r) {
-            float* v = data + r * row_size;
-            strip_bad[r] = 0;
-            if (!row_values(half ? half_rows[b].data() + r * row_size : nullptr, 0, values, v))
-              strip_bad[r] = zero_nonfinite(v, row_size, 0, &strip_bad_first[r]);
-          }
-        });
-        // ... then their local range taken and highlights compressed.
-        local->open(y, y1);
-        parallel_for(values, threads, [&](long k0, long k1) {
-          for (long r = 0; r < rows; ++r) {
-            float* v = data + r * row_size + k0;
-            local->fold(y + r, k0, k1, v);
-            if (compressed) for_colour(v, std::size_t(k1 - k0), highlight_compress, std::size_t(k0));
-          }
-        });
-        local->close(y1);
-        hexagonal->add_rows(y, y1, data);
-        for (long r = 0; r < rows; ++r) {
-          if (strip_bad[r] && bad.count == 0) {
-            bad.c = int(strip_bad_first[r] % C);
-            bad.x = strip_bad_first[r] / long(C);
-            bad.y = ch.y0 + r;
-            bad.file = ch.reader->path();
-          }
-          bad.count += strip_bad[r];
+      std::vector<Chunk> chunks;
+      long strip = 0;
+      long g = 0;
+      for (const auto& r : readers) {
+        strip = std::max(strip, r->preferred_strip());
+        for (long y = 0; y < r->height(); y += r->preferred_strip()) {
+          const long y1 = std::min(r->height(), y + r->preferred_strip());
+          chunks.push_back({r.get(), y, y1, g + y});
         }
-        ahead.release(i);
-        if (bad.count && o.nonfinite == "error") break;
-        progress.update(double(y1) / hin);
+        g += r->height();
       }
-      t_acquire = seconds_since(t);
-    }
+      // Samples stored as half are read as they are and converted here, on
+      // the worker threads (OpenImageIO's conversion is serial and slower than
+      // decoding). Strips are read on a thread of their own into two slots:
+      // the next strip decodes while this one is acquired.
+      const std::size_t row_size = std::size_t(win) * C;
+      const int slots = 2;
+      std::vector<Buffer<std::uint16_t>> half_rows(slots);  // unset: each strip is read into them
+      std::vector<Buffer<float>> float_rows(slots);
+      for (int b = 0; b < slots; ++b) {
+        if (half) half_rows[b].resize(strip * row_size);
+        float_rows[b].resize(strip * row_size);
+      }
+      // Per strip row: its non-finite samples (rows are checked at once on
+      // different threads).
+      std::vector<long> strip_bad(strip), strip_bad_first(strip);
+      {
+        Progress progress(!o.quiet, "reading and acquiring");
+        const auto t = Clock::now();
+        auto read = [&](std::size_t i, int b) {
+          const Chunk& ch = chunks[i];
+          if (half)
+            ch.reader->read_rows_half(ch.y0, ch.y1, half_rows[b].data());
+          else
+            ch.reader->read_rows(ch.y0, ch.y1, float_rows[b].data());
+        };
+        ReadAhead ahead(chunks.size(), slots, read);
+        // The plan (the weights of every input row and column, some
+        // milliseconds) is made while the first strips decode.
+        const HexLayout layout =
+            hex_layout(o.density, double(W), double(H), hex_default_margin(hex_order));
+        hex_plan = std::make_unique<HexAcquisitionPlan>(win, hin, C, double(W), double(H), layout,
+                                                        hex_order, boundary, quadrature);
+        hexagonal = std::make_unique<HexAcquisition>(*hex_plan, threads);
+        local = std::make_unique<LocalRange>(win, hin, C, W, H);
+        for (std::size_t i = 0; i < chunks.size(); ++i) {
+          const Chunk& ch = chunks[i];
+          const long y = ch.global, y1 = ch.global + ch.y1 - ch.y0;
+          const int b = ahead.wait(i);  // rethrows a read error
+          const long rows = y1 - y;
+          float* data = float_rows[b].data();
+          const long values = long(row_size);
+          // Non-finite samples zeroed (and counted), ...
+          parallel_for(rows, threads, [&](long r0, long r1) {
+            for (long r = r0; r < r1; ++r) {
+              float* v = data + r * row_size;
+              strip_bad[r] = 0;
+              if (!row_values(half ? half_rows[b].data() + r * row_size : nullptr, 0, values, v))
+                strip_bad[r] = zero_nonfinite(v, row_size, 0, &strip_bad_first[r]);
+            }
+          });
+          // ... then their local range taken and highlights compressed.
+          local->open(y, y1);
+          parallel_for(values, threads, [&](long k0, long k1) {
+            for (long r = 0; r < rows; ++r) {
+              float* v = data + r * row_size + k0;
+              local->fold(y + r, k0, k1, v);
+              if (compressed) for_colour(v, std::size_t(k1 - k0), highlight_compress, std::size_t(k0));
+            }
+          });
+          local->close(y1);
+          hexagonal->add_rows(y, y1, data);
+          for (long r = 0; r < rows; ++r) {
+            if (strip_bad[r] && bad.count == 0) {
+              bad.c = int(strip_bad_first[r] % C);
+              bad.x = strip_bad_first[r] / long(C);
+              bad.y = ch.y0 + r;
+              bad.file = ch.reader->path();
+            }
+            bad.count += strip_bad[r];
+          }
+          ahead.release(i);
+          if (bad.count && o.nonfinite == "error") break;
+          progress.update(double(y1) / hin);
+        }
+        t_acquire = seconds_since(t);
+      }
     }
     readers.clear();  // frees the decoders' buffers before the later stages
     if (bad.count) {
