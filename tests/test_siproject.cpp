@@ -518,13 +518,13 @@ TEST_F(Siproject, ReadBandsTakesEveryBandOnceWholeAndInOrder) {
       };
       cb.strip = [&](int t, const Strip& s) {
         const long n = bands.of(s.global);
-        EXPECT_EQ(s.global, s.y0 + (s.band == 1 ? 37 : 0));
-        EXPECT_EQ(*s.path, paths[s.band]);
+        EXPECT_EQ(s.global, s.y0 + (s.file == 1 ? 37 : 0));
+        EXPECT_EQ(*s.path, paths[s.file]);
         EXPECT_LE(s.global + s.y1 - s.y0, bands.end(n));
         // cut only at the file's strips of 5 rows, the band's ends and the file's end
         EXPECT_TRUE(s.y0 % 5 == 0 || s.global == bands.begin(n)) << "strip from " << s.y0;
         EXPECT_TRUE(s.y1 % 5 == 0 || s.global + s.y1 - s.y0 == bands.end(n) ||
-                    s.y1 == (s.band == 0 ? 37 : 50))
+                    s.y1 == (s.file == 0 ? 37 : 50))
             << "strip to " << s.y1;
         EXPECT_EQ(s.y0 / 5, (s.y1 - 1) / 5) << "within one strip of the file";
         const std::size_t n0 = std::size_t(s.global) * 23 * 3, count = std::size_t(s.y1 - s.y0) * 23 * 3;

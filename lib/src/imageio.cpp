@@ -179,11 +179,13 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
   std::size_t values = 0;         // largest strip
   for (const auto& r : sets[0]) {
     if (T > 1 && r->format_name() != "openexr")
-      throw std::logic_error(r->path() + ": read_bands() with several workers on a file not OpenEXR");
+      throw std::logic_error(r->path() +
+                             ": read_bands() with several workers on a file not OpenEXR");
     if (half && !r->stores_half())
       throw std::logic_error(r->path() + ": read_bands() with half on samples not stored as half");
     start.push_back(start.back() + r->height());
-    values = std::max(values, std::size_t(std::min(strip, r->height())) * r->width() * r->channels());
+    values =
+        std::max(values, std::size_t(std::min(strip, r->height())) * r->width() * r->channels());
   }
   if (start.back() != bands.rows())
     throw std::logic_error("read_bands(): the files hold " + std::to_string(start.back()) +
@@ -214,7 +216,9 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
           if (b > stop.load()) return;  // an earlier band stopped
           const std::size_t f = std::upper_bound(start.begin(), start.end(), y) - start.begin() - 1;
           const long y0 = y - start[f];
-          const long y1 = std::min({bands.end(b) - start[f], start[f + 1] - start[f], (y0 / strip + 1) * strip});
+          // to the end of the file's strip, the band or the file
+          const long y1 = std::min({(y0 / strip + 1) * strip, bands.end(b) - start[f],
+                                    start[f + 1] - start[f]});
           if (half)
             readers[f]->read_rows_half(y0, y1, half_rows.data());
           else

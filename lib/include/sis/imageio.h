@@ -83,12 +83,12 @@ class ImageReader {
   void read(long y0, long y1, SampleFormat type, void* rows);
 };
 
-// A strip that read_bands hands over: rows [y0, y1) of file `band` (0-based
-// in its data window; `path` is its file), rows [global, global + y1 - y0)
-// of the image the bands tile, with its samples as stored: half bits in
-// `half`, or floats in `floats` (writable), width * channels per row.
+// A strip that read_bands hands over: rows [y0, y1) of input file `file`
+// (0-based in its data window; `path` is its name), rows [global, global +
+// y1 - y0) of the image the files tile, with its samples as stored: half
+// bits in `half`, or floats in `floats` (writable), width * channels per row.
 struct Strip {
-  std::size_t band;
+  std::size_t file;
   const std::string* path;
   long y0, y1, global;
   const std::uint16_t* half;
