@@ -28,7 +28,8 @@ std::string clamp_name(Clamp c);
 // the pixel's interval or, when there are none (upsampling), the one nearest
 // to its centre. Rows stream in order, or band by band (bands.h) on several
 // threads at once: an output row whose input rows lie in several bands is
-// the min (max) of their ranges in band order, v < a ? v : a, as if in order.
+// the min (max) of the bands' ranges, merged in band order (v < a ? v : a):
+// the values one band would give, but for the sign of a zero.
 class LocalRange {
  public:
   // band_rows: input rows per band (as the acquisition's; < 1: one band).
