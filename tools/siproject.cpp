@@ -205,6 +205,23 @@ long zero_nonfinite(float* v, std::size_t n, long k0, long* first) {
   return count;
 }
 
+// Adds a strip's non-finite samples to n: per strip row r of `rows`, count[r]
+// of them, the first at value first[r] of the row (read only when count[r]);
+// the strip's rows start at row y0 of `file`.
+template <typename Counts>
+void add_nonfinite(NonFinite& n, const Counts& count, const Counts& first, long rows, long y0,
+                   int channels, const std::string& file) {
+  for (long r = 0; r < rows; ++r) {
+    if (count[r] && n.count == 0) {
+      n.c = int(first[r] % channels);
+      n.x = first[r] / channels;
+      n.y = y0 + r;
+      n.file = file;
+    }
+    n.count += count[r];
+  }
+}
+
 // Reads and acquires the image on the Cartesian lattice band by band
 // (read_bands): with OpenEXR inputs each worker thread decodes its band's
 // strips and sums them while they are in its cache, into a band of the
@@ -274,15 +291,7 @@ NonFinite acquire_bands(const std::vector<std::unique_ptr<ImageReader>>& readers
     });
     k.range->close(y1);
     NonFinite& n = bad[bands.of(y)];
-    for (long r = 0; r < rows; ++r) {
-      if (k.bad[r] && n.count == 0) {
-        n.c = int(k.bad_first[r] % long(first.channels()));
-        n.x = k.bad_first[r] / long(first.channels());
-        n.y = s.y0 + r;
-        n.file = *s.path;
-      }
-      n.count += k.bad[r];
-    }
+    add_nonfinite(n, k.bad, k.bad_first, rows, s.y0, first.channels(), *s.path);
     return !(stop && n.count);
   };
   cb.end = [&](int t, long b) {
@@ -587,15 +596,7 @@ int run(const Options& o) {
           });
           local->close(y1);
           hexagonal->add_rows(y, y1, data);
-          for (long r = 0; r < rows; ++r) {
-            if (strip_bad[r] && bad.count == 0) {
-              bad.c = int(strip_bad_first[r] % C);
-              bad.x = strip_bad_first[r] / long(C);
-              bad.y = ch.y0 + r;
-              bad.file = ch.reader->path();
-            }
-            bad.count += strip_bad[r];
-          }
+          add_nonfinite(bad, strip_bad, strip_bad_first, rows, ch.y0, C, ch.reader->path());
           ahead.release(i);
           if (bad.count && o.nonfinite == "error") break;
           progress.update(double(y1) / hin);
