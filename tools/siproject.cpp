@@ -72,9 +72,15 @@ std::pair<long, long> parse_size(const std::string& s) {
   return {w, h};
 }
 
+// True when a and b name one file: the same path however spelt (relative or
+// absolute, through links or "..", existing or not), or two names of one
+// existing file (hard links).
 bool same_file(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  if (fs::equivalent(a, b, ec) && !ec) return true;
   std::error_code ec1, ec2;
-  const fs::path pa = fs::weakly_canonical(a, ec1), pb = fs::weakly_canonical(b, ec2);
+  const fs::path pa = fs::weakly_canonical(fs::absolute(a, ec1), ec1);
+  const fs::path pb = fs::weakly_canonical(fs::absolute(b, ec2), ec2);
   return !ec1 && !ec2 && pa == pb;
 }
 
@@ -680,13 +686,17 @@ int run(const Options& o) {
       {"Software", "siproject"},
   };
   t = Clock::now();
+  // Both outputs are written whole before either replaces a file.
+  std::optional<StagedFile> coeffs_file;
   if (!o.coeffs.empty())
-    write_coefficients(o.coeffs, k, names,
-                       {{"sis:input", md[4].second},
-                        {"sis:input_format", input_half ? "half" : "float"},
-                        {"sis:highlight_compress", compressed ? "1" : "0"}});
+    coeffs_file.emplace(stage_coefficients(o.coeffs, k, names,
+                                           {{"sis:input", md[4].second},
+                                            {"sis:input_format", input_half ? "half" : "float"},
+                                            {"sis:highlight_compress", compressed ? "1" : "0"}}));
   Buffer<double>().swap(k.c.data);
-  write_image(o.output, image, names, md, alpha, out_format);
+  StagedFile output_file = stage_image(o.output, image, names, md, alpha, out_format);
+  if (coeffs_file) coeffs_file->commit();
+  output_file.commit();
   const double t_write = seconds_since(t);
   if (o.verbose) {
     std::fprintf(stderr,
@@ -785,6 +795,7 @@ int main(int argc, char** argv) {
   app.add_flag("-v,--verbose", o.verbose, "print sizes and the time of each stage");
   app.add_flag("-q,--quiet", o.quiet, "print nothing but errors");
   if (const auto code = sis::cli::parse(app, argc, argv)) return *code;
+  remove_staged_files_on_signals();
   o.generator_given = g->count() > 0;
   o.method_given = m->count() > 0;
   o.boundary_given = b->count() > 0;

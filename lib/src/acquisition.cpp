@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sis/box_spline.h"
 #include "sis/parallel.h"
 #include "sis/prefetch.h"
 
@@ -13,14 +14,116 @@ namespace sis {
 
 namespace {
 
+// The knots of a kernel's polynomial pieces in [-radius, radius] (none for
+// the kernels that are not piecewise polynomials).
+std::vector<double> kernel_knots(const Kernel& kernel) {
+  std::vector<double> t;
+  if (kernel.kind() == KernelKind::BSpline)
+    for (int i = 0; i <= kernel.degree() + 1; ++i) t.push_back(-0.5 * (kernel.degree() + 1) + i);
+  else if (kernel.kind() == KernelKind::Mitchell)
+    for (int i = -2; i <= 2; ++i) t.push_back(i);
+  return t;
+}
+
+// Rows of the input's model that an upsampled axis reaches from one sample:
+// the cubic interpolation prefilter's impulse response is truncated where
+// it falls below 2^-64 of its peak (|z|^L, z = sqrt(3) - 2).
+constexpr long kModelReach = 36;
+
+// An axis whose samples are sparser than the lattice (step > h: upsampling),
+// where the point sum would not be an inner product. The samples f_i are
+// modelled by their cubic spline interpolant under the boundary rule,
+// f(x) = sum_k c_k b3((x - x_k) / step), x_k = (k + 1/2) step, c = p * f
+// with p the interpolation prefilter (p[m] = (1 - z) / (1 + z) z^|m|, the
+// inverse of the sampled cubic B-spline), and that model is projected
+// exactly: r[n] = sum_k G[n][k] c_k with G[n][k] = (1/h) int b3((x - x_k) /
+// step) phi((x - p_n) / h) dx, by Gauss-Legendre on the pieces between both
+// functions' knots (exact for piecewise polynomials). The weight of sample j
+// is sum_k G[n][k] p[k - j], over the extended indices, folded by the rule.
+// The model reproduces polynomials of degree 3: a flat image stays flat, a
+// ramp stays a ramp. Conventional methods: the same, normalised below.
+AxisWeights model_axis(int axis, long coefficients, long samples, double extent,
+                       const Lattice& lattice, const Kernel& kernel, Boundary boundary) {
+  const double step = extent / samples;
+  const double h = lattice.axis_step(axis);
+  const double R = kernel.radius();
+  const double z = bspline_prefilter_poles(1).at(0);
+  const double gain = (1 - z) / (1 + z);
+  std::vector<double> p(kModelReach + 1);
+  for (long m = 0; m <= kModelReach; ++m) p[m] = gain * std::pow(z, double(m));
+  std::vector<double> gx, gw;
+  gauss_legendre01(8, gx, gw);  // exact to degree 15; b3 phi has degree <= 10
+  const std::vector<double> knots = kernel_knots(kernel);
+  const bool polynomial = !knots.empty();
+  // G[n][k] for the model's k under phi_n: [k0, k0 + g.size())
+  auto model_row = [&](long n, long& k0, std::vector<double>& g) {
+    const double pn = lattice.axis_position(axis, n);
+    k0 = long(std::ceil((pn - R * h) / step - 2.5));
+    const long k1 = long(std::floor((pn + R * h) / step + 1.5));
+    g.assign(std::size_t(std::max(0L, k1 - k0 + 1)), 0.0);
+    std::vector<double> cut;
+    for (long k = k0; k <= k1; ++k) {
+      const double xk = (k + 0.5) * step;
+      cut.clear();
+      cut.push_back(-R);
+      cut.push_back(R);
+      for (double t : knots) cut.push_back(t);
+      for (int m = -2; m <= 2; ++m) cut.push_back((xk - pn + m * step) / h);
+      std::sort(cut.begin(), cut.end());
+      double sum = 0;
+      for (std::size_t q = 0; q + 1 < cut.size(); ++q) {
+        const double a = std::max(-R, cut[q]), b = std::min(R, cut[q + 1]);
+        if (!(b > a)) continue;
+        // non-polynomial kernels: pieces of at most half a step
+        const int parts = polynomial ? 1 : std::max(1, int(std::ceil((b - a) / 0.5)));
+        const double len = (b - a) / parts;
+        for (int part = 0; part < parts; ++part)
+          for (std::size_t i = 0; i < gx.size(); ++i) {
+            const double t = a + (part + gx[i]) * len;
+            sum += gw[i] * len * bspline(3, (pn + h * t - xk) / step) * kernel.eval(t);
+          }
+      }
+      g[std::size_t(k - k0)] = sum;
+    }
+  };
+  long cached = -1, k0 = 0;
+  std::vector<double> g;
+  auto range = [&](long n) {
+    model_row(n, k0, g);
+    cached = n;
+    return std::pair<long, long>(k0 - kModelReach, k0 + long(g.size()) - 1 + kModelReach);
+  };
+  auto weight = [&](long n, long j) {
+    if (n != cached) range(n);
+    double w = 0;
+    for (std::size_t q = 0; q < g.size(); ++q) {
+      const long d = std::labs(k0 + long(q) - j);
+      if (d <= kModelReach) w += g[q] * p[std::size_t(d)];
+    }
+    return w;
+  };
+  return make_axis_weights(coefficients, samples, boundary, range, weight);
+}
+
 // Weights from the samples (i + 1/2) * step, i in [0, samples), to the
-// coefficients n along one axis of a separable lattice.
+// coefficients n along one axis of a separable lattice: the point sum where
+// the samples are at least as dense as the lattice, the projected model of
+// model_axis() where they are sparser.
 AxisWeights acquisition_axis(int axis, long coefficients, long samples, double extent,
                              const Lattice& lattice, const Kernel& kernel, Boundary boundary,
                              Method method) {
   const double step = extent / samples;  // sample spacing, output pixels
   const double h = lattice.axis_step(axis);
   const double support = kernel.radius() * h;
+  if (step > h) {
+    AxisWeights w = model_axis(axis, coefficients, samples, extent, lattice, kernel, boundary);
+    if (method == Method::Conventional)
+      for (long n = 0; n < coefficients; ++n) {
+        const double s = w.sum(n);
+        for (long e = w.begin(n); e < w.end(n); ++e) w.weight[e] /= s;
+      }
+    return w;
+  }
   auto range = [&](long n) {
     const double p = lattice.axis_position(axis, n);
     return std::pair<long, long>(static_cast<long>(std::ceil((p - support) / step - 0.5)),

@@ -1,13 +1,17 @@
 #include "sis/imageio.h"
 
 #include <Imath/half.h>
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
+
+#include <cerrno>
 
 #include <algorithm>
 #include <atomic>
 #include <cctype>
 #include <climits>
+#include <cstring>
 #include <condition_variable>
 #include <deque>
 #include <exception>
@@ -35,6 +39,12 @@ using OIIO::TypeDesc;
 struct ImageReader::Impl {
   std::unique_ptr<ImageInput> in;
   ImageSpec spec;
+  // Tiled files: the tile row last read whole (tile-row index, element
+  // size; -1 when none), for the rows of a strip that starts or ends inside
+  // a tile row (read_tiles takes whole tile rows only).
+  long cached_tile_row = -1;
+  int cached_elem = 0;
+  std::vector<unsigned char> tile_row;
 };
 
 ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path) {
@@ -79,6 +89,8 @@ std::string ImageReader::attribute(const std::string& name) const {
   return impl_->spec.get_string_attribute(name);
 }
 
+long ImageReader::tile_height() const { return std::max(0, impl_->spec.tile_height); }
+
 long ImageReader::preferred_strip() const {
   const long th = impl_->spec.tile_height;
   if (th > 0) return th * std::max(1L, 32 / th);
@@ -106,6 +118,16 @@ void ImageReader::read_rows_half(long y0, long y1, std::uint16_t* rows) {
   read(y0, y1, SampleFormat::Half, rows);
 }
 
+namespace {
+[[noreturn]] void read_failed(const std::string& path, long y0, long y1, ImageInput& in) {
+  std::string why = in.geterror();
+  if (why.empty()) why = "read failed";
+  std::ostringstream m;
+  m << path << ": cannot read rows " << y0 << " to " << y1 - 1 << " (truncated or corrupt?): " << why;
+  throw InputError(m.str());
+}
+}  // namespace
+
 void ImageReader::read(long y0, long y1, SampleFormat format, void* rows) {
   const ImageSpec& s = impl_->spec;
   const TypeDesc type = format == SampleFormat::Half ? TypeDesc::HALF : TypeDesc::FLOAT;
@@ -115,25 +137,54 @@ void ImageReader::read(long y0, long y1, SampleFormat format, void* rows) {
     throw InputError(m.str());
   }
   if (y1 == y0) return;
-  bool ok;
   // Samples stored as asked are read as stored (TypeDesc::UNKNOWN), straight
   // into `rows`: OpenImageIO 2.4 stages any call that names a type, even the
-  // stored one, through a buffer (a fresh 64 MB one per call for scanlines),
-  // whose page faults cost more than the decoding of the strip.
+  // stored one, through a buffer (a fresh one per call for scanlines).
   const TypeDesc asked = stored_as(s, type) ? TypeDesc::UNKNOWN : type;
-  if (s.tile_width > 0)
-    ok = impl_->in->read_tiles(0, 0, s.x, s.x + s.width, s.y + y0, s.y + y1, s.z, s.z + 1, 0,
-                               s.nchannels, asked, rows);
-  else
-    ok = impl_->in->read_scanlines(0, 0, s.y + y0, s.y + y1, s.z, 0, s.nchannels, asked, rows);
-  if (!ok) {
-    std::string why = impl_->in->geterror();
-    if (why.empty()) why = "read failed";
-    std::ostringstream m;
-    m << path_ << ": cannot read rows " << y0 << " to " << y1 - 1 << " (truncated or corrupt?): "
-      << why;
-    throw InputError(m.str());
+  ImageInput& in = *impl_->in;
+  if (s.tile_width <= 0) {
+    if (!in.read_scanlines(0, 0, s.y + y0, s.y + y1, s.z, 0, s.nchannels, asked, rows))
+      read_failed(path_, y0, y1, in);
+    return;
   }
+  // Tiled: read_tiles takes whole tile rows (or the image's last, partial
+  // one). Whole tile rows inside [y0, y1) are read into `rows`; a tile row
+  // that the strip starts or ends inside is read whole into a one-row cache
+  // and its rows copied (a strip's last tile row is the next strip's first).
+  const long th = s.tile_height;
+  const int elem = format == SampleFormat::Half ? 2 : 4;
+  const std::size_t row_bytes = std::size_t(s.width) * s.nchannels * elem;
+  auto tiles = [&](long a, long b, void* dst) {
+    if (!in.read_tiles(0, 0, s.x, s.x + s.width, s.y + a, s.y + b, s.z, s.z + 1, 0, s.nchannels,
+                       asked, dst))
+      read_failed(path_, a, b, in);
+  };
+  auto from_cache = [&](long a, long b) {  // rows [a, b) of one tile row
+    const long t = a / th;
+    if (impl_->cached_tile_row != t || impl_->cached_elem != elem) {
+      const long t0 = t * th, t1 = std::min<long>(s.height, t0 + th);
+      impl_->cached_tile_row = -1;
+      impl_->tile_row.resize(std::size_t(t1 - t0) * row_bytes);
+      tiles(t0, t1, impl_->tile_row.data());
+      impl_->cached_tile_row = t;
+      impl_->cached_elem = elem;
+    }
+    std::memcpy(static_cast<unsigned char*>(rows) + std::size_t(a - y0) * row_bytes,
+                impl_->tile_row.data() + std::size_t(a - t * th) * row_bytes,
+                std::size_t(b - a) * row_bytes);
+  };
+  long y = y0;
+  if (y % th != 0) {  // the head, inside a tile row
+    const long b = std::min(y1, (y / th + 1) * th);
+    from_cache(y, b);
+    y = b;
+  }
+  const long whole_end = y1 == s.height ? y1 : y1 / th * th;
+  if (whole_end > y) {
+    tiles(y, whole_end, static_cast<unsigned char*>(rows) + std::size_t(y - y0) * row_bytes);
+    y = whole_end;
+  }
+  if (y < y1) from_cache(y, y1);  // the tail, inside a tile row
 }
 
 SampleFormat parse_sample_format(const std::string& spelling) {
@@ -145,7 +196,9 @@ SampleFormat parse_sample_format(const std::string& spelling) {
 long decode_strip_rows(const ImageReader& reader) {
   const long row_bytes =
       std::max(1L, reader.width() * reader.channels() * (reader.stores_half() ? 2L : 4L));
-  return std::clamp(16 * ((1L << 20) / row_bytes / 16), 16L, 256L);
+  const long rows = std::clamp(16 * ((1L << 20) / row_bytes / 16), 16L, 256L);
+  const long th = reader.tile_height();
+  return th > 0 ? std::max(th, rows / th * th) : rows;  // whole tile rows
 }
 
 namespace {
@@ -339,31 +392,73 @@ float srgb_encode(float v) {
   return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
 }
 
-// Writes `spec` + pixels to a temporary file beside `path`, then renames.
-void write_atomically(const std::string& path, const ImageSpec& spec, TypeDesc data_type,
-                      const void* data) {
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw OutputError(path + ": folder " + dir.string() + " does not exist");
-  const fs::path tmp = dir / ("." + target.stem().string() + ".tmp" + std::to_string(::getpid()) +
-                              target.extension().string());
-  auto out = ImageOutput::create(tmp.string());
+// Writes an OpenImageIO output through a staged file's descriptor. Every
+// write is checked (short writes retried, EINTR included) and the first
+// error is kept, to be read once the writer is done: format writers do not
+// all check what they write (a PNG writer on a full disk reports success),
+// and some end the process on a failed write (libjpeg's default error
+// exit), so after a failure the writer is told every write succeeded and
+// the output is discarded.
+class CheckedFile : public OIIO::Filesystem::IOProxy {
+ public:
+  CheckedFile(const std::string& name, int fd) : IOProxy(name, Write), fd_(fd) {}
+  const char* proxytype() const override { return "sis-checked-file"; }
+  void close() override { m_mode = Closed; }
+  size_t write(const void* buf, size_t size) override {
+    const size_t n = pwrite(buf, size, m_pos);
+    m_pos += int64_t(n);
+    return n;
+  }
+  size_t pwrite(const void* buf, size_t size, int64_t offset) override {
+    const char* p = static_cast<const char*>(buf);
+    size_t done = 0;
+    while (done < size && !errno_) {
+      const ssize_t n = ::pwrite(fd_, p + done, size - done, offset + int64_t(done));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        errno_ = n < 0 ? errno : ENOSPC;
+        break;
+      }
+      done += size_t(n);
+    }
+    end_ = std::max(end_, offset + int64_t(size));
+    return size;
+  }
+  size_t read(void* buf, size_t size) override {
+    const size_t n = pread(buf, size, m_pos);
+    m_pos += int64_t(n);
+    return n;
+  }
+  size_t pread(void* buf, size_t size, int64_t offset) override {
+    const ssize_t n = ::pread(fd_, buf, size, offset);
+    return n < 0 ? 0 : size_t(n);
+  }
+  size_t size() const override { return size_t(end_); }
+  // 0, or the errno of the first failed write
+  int failure() const { return errno_; }
+
+ private:
+  int fd_;
+  int64_t end_ = 0;
+  int errno_ = 0;
+};
+
+// Writes `spec` + pixels to a staged file beside `path` (committed by the
+// caller): never a partial file at `path`, and no temporary file left.
+StagedFile stage(const std::string& path, const ImageSpec& spec, TypeDesc data_type,
+                 const void* data) {
+  auto out = ImageOutput::create(path);
   if (!out) throw OutputError(path + ": cannot write this format: " + OIIO::geterror());
-  bool ok = out->open(tmp.string(), spec) && out->write_image(data_type, data) && out->close();
-  if (!ok) {
-    const std::string why = out->geterror();
-    out.reset();
-    fs::remove(tmp, ec);
-    throw OutputError(path + ": " + (why.empty() ? "write failed" : why));
-  }
+  StagedFile file(path);
+  CheckedFile proxy(file.temporary(), file.fd());
+  const bool ok = out->set_ioproxy(&proxy) && out->open(file.temporary(), spec) &&
+                  out->write_image(data_type, data) && out->close();
+  const std::string why = out->geterror();
   out.reset();
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    std::error_code ignore;
-    fs::remove(tmp, ignore);
-    throw OutputError(path + ": cannot rename the finished file into place: " + ec.message());
-  }
+  if (proxy.failure()) throw OutputError(path + ": cannot write: " + std::strerror(proxy.failure()));
+  if (!ok) throw OutputError(path + ": " + (why.empty() ? "write failed" : why));
+  file.close();
+  return file;
 }
 
 }  // namespace
@@ -371,6 +466,12 @@ void write_atomically(const std::string& path, const ImageSpec& spec, TypeDesc d
 void write_image(const std::string& path, const Image& image,
                  const std::vector<std::string>& channel_names, const Metadata& metadata,
                  int alpha_channel, SampleFormat format) {
+  stage_image(path, image, channel_names, metadata, alpha_channel, format).commit();
+}
+
+StagedFile stage_image(const std::string& path, const Image& image,
+                       const std::vector<std::string>& channel_names, const Metadata& metadata,
+                       int alpha_channel, SampleFormat format) {
   if (image.width < 1 || image.height < 1 || image.channels < 1)
     throw OutputError(path + ": refusing to write an empty image");
   const bool eight = is_8bit_format(path);
@@ -384,13 +485,9 @@ void write_image(const std::string& path, const Image& image,
   if (stored == TypeDesc::HALF) {  // converted here: OpenImageIO's conversion is serial and slower
     Buffer<std::uint16_t> half(image.data.size());  // unset: every value converted
     float_to_half(image.data.data(), half.data(), half.size());
-    write_atomically(path, spec, TypeDesc::HALF, half.data());
-    return;
+    return stage(path, spec, TypeDesc::HALF, half.data());
   }
-  if (!eight) {
-    write_atomically(path, spec, TypeDesc::FLOAT, image.data.data());
-    return;
-  }
+  if (!eight) return stage(path, spec, TypeDesc::FLOAT, image.data.data());
   // 8-bit: colour channels sRGB-encoded (after dividing out premultiplied
   // alpha), alpha linear; everything clamped to [0, 1].
   spec.attribute("oiio:ColorSpace", "sRGB");
@@ -407,11 +504,17 @@ void write_image(const std::string& path, const Image& image,
         enc[p * C + c] = srgb_encode(a >= 0 ? (alpha > 0 ? in[c] / alpha : 0.0f) : in[c]);
     }
   }
-  write_atomically(path, spec, TypeDesc::FLOAT, enc.data());
+  return stage(path, spec, TypeDesc::FLOAT, enc.data());
 }
 
 void write_coefficients(const std::string& path, const Coefficients& k,
                         const std::vector<std::string>& channel_names, const Metadata& extra) {
+  stage_coefficients(path, k, channel_names, extra).commit();
+}
+
+StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
+                              const std::vector<std::string>& channel_names,
+                              const Metadata& extra) {
   if (is_8bit_format(path))
     throw OutputError(path + ": coefficient files must be float EXR, not an 8-bit format");
   Image grid(k.c.width, k.c.height, k.c.channels);
@@ -442,7 +545,7 @@ void write_coefficients(const std::string& path, const Coefficients& k,
       {"sis:image_height", num(k.image_height)},
   };
   md.insert(md.end(), extra.begin(), extra.end());
-  write_image(path, grid, channel_names, md);
+  return stage_image(path, grid, channel_names, md);
 }
 
 bool is_coefficient_file(const ImageReader& r) { return r.attribute("sis:coefficients") == "1"; }

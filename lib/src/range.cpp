@@ -33,10 +33,10 @@ void pixel_ranges(long samples, long count, std::vector<long>& begin, std::vecto
     long b = static_cast<long>(std::ceil((p + 1) / step - 0.5));
     a = std::clamp(a, 0L, samples);
     b = std::clamp(b, 0L, samples);
-    if (b <= a) {  // no sample inside: the nearest to the centre
-      const long i = std::clamp(static_cast<long>(std::floor((p + 0.5) / step)), 0L, samples - 1);
-      a = i;
-      b = i + 1;
+    if (b <= a) {  // no sample inside (upsampling): the two either side of the centre
+      const long i = static_cast<long>(std::floor((p + 0.5) / step - 0.5));
+      a = std::clamp(i, 0L, samples - 1);
+      b = std::clamp(i + 1, 0L, samples - 1) + 1;
     }
     begin[p] = a;
     end[p] = b;

@@ -13,6 +13,7 @@
 
 #include "sis/bands.h"
 #include "sis/image.h"
+#include "sis/staged_file.h"
 
 namespace sis {
 
@@ -67,8 +68,12 @@ class ImageReader {
   std::string attribute(const std::string& name) const;
   // Rows aligned to the file's storage (tile height or 64 scanlines).
   long preferred_strip() const;
+  // Rows per tile (0 for scanline files).
+  long tile_height() const;
   // Reads rows [y0, y1) (0-based within the data window) into `rows`,
-  // interleaved floats. Throws InputError on a truncated or corrupt file.
+  // interleaved floats: any rows, of scanline or tiled files (tile rows
+  // that [y0, y1) cuts are decoded whole, the last one kept for the next
+  // call). Throws InputError on a truncated or corrupt file.
   void read_rows(long y0, long y1, float* rows);
   // True when every channel is stored as half: then rows can be read as
   // they are stored, without OpenImageIO's conversion (read_rows_half).
@@ -132,12 +137,19 @@ Image read_image(const std::string& path);
 // Writes an image. EXR (and other float formats) as float, or half when
 // `format` says so, with the metadata as string attributes; 8-bit formats (PNG, JPEG, 8-bit TIFF...) sRGB-encoded
 // and clamped to [0, 1], alpha (premultiplied) divided out first.
-// Written to a temporary name in the same folder, then renamed: never a
-// partial file. Throws OutputError naming the file.
+// Written to a staged file beside `path` (staged_file.h), then renamed:
+// never a partial file, and any failed write (a full disk, the last block
+// and the close included) is an error. Throws OutputError naming the file.
 void write_image(const std::string& path, const Image& image,
                  const std::vector<std::string>& channel_names = {},
                  const Metadata& metadata = {}, int alpha_channel = -1,
                  SampleFormat format = SampleFormat::Float);
+// As write_image, short of the rename: the caller commits, so that several
+// outputs are all written before any of them replaces a file.
+StagedFile stage_image(const std::string& path, const Image& image,
+                       const std::vector<std::string>& channel_names = {},
+                       const Metadata& metadata = {}, int alpha_channel = -1,
+                       SampleFormat format = SampleFormat::Float);
 
 // True for the formats written 8-bit sRGB by write_image.
 bool is_8bit_format(const std::string& path);
@@ -147,6 +159,9 @@ bool is_8bit_format(const std::string& path);
 void write_coefficients(const std::string& path, const Coefficients& k,
                         const std::vector<std::string>& channel_names = {},
                         const Metadata& extra = {});
+StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
+                              const std::vector<std::string>& channel_names = {},
+                              const Metadata& extra = {});
 bool is_coefficient_file(const ImageReader& reader);
 Coefficients read_coefficients(ImageReader& reader);
 

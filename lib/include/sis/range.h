@@ -25,8 +25,8 @@ std::string clamp_name(Clamp c);
 
 // Min and max of the input samples whose positions fall in each output pixel
 // (of a W x H image over win x hin samples). Per axis: the samples inside
-// the pixel's interval or, when there are none (upsampling), the one nearest
-// to its centre. Rows stream in order, or band by band (bands.h) on several
+// the pixel's interval or, when there are none (upsampling), the two either
+// side of its centre (the samples the value there is interpolated from). Rows stream in order, or band by band (bands.h) on several
 // threads at once: an output row whose input rows lie in several bands is
 // the min (max) of the bands' ranges, merged in band order (v < a ? v : a):
 // the values one band would give, but for the sign of a zero.
