@@ -94,7 +94,8 @@ TEST(LocalRange, MatchesBruteForceAtAnyRatio) {
       EXPECT_EQ(banded.min().data, lr.min().data) << band_rows;
       EXPECT_EQ(banded.max().data, lr.max().data) << band_rows;
     }
-    // per axis: the samples inside the pixel's interval, or the nearest one
+    // per axis: the samples inside the pixel's interval, or (upsampling) the
+    // last at or before its centre and the first after it, those that exist
     auto inside = [](long i, long samples, long count, long p) {
       const double x = (i + 0.5) * count / samples;
       bool any = false;
@@ -103,11 +104,16 @@ TEST(LocalRange, MatchesBruteForceAtAnyRatio) {
         any = any || (xk >= p && xk < p + 1);
       }
       if (any) return x >= p && x < p + 1;
-      long best = 0;
-      for (long k = 1; k < samples; ++k)
-        if (std::abs((k + 0.5) * count / samples - p - 0.5) <= std::abs((best + 0.5) * count / samples - p - 0.5))  // ties: the later
-          best = k;
-      return i == best;
+      const double centre = p + 0.5;
+      long before = -1, after = samples;
+      for (long k = 0; k < samples; ++k) {
+        const double xk = (k + 0.5) * count / samples;
+        if (xk <= centre) before = k;
+        if (xk > centre && after == samples) after = k;
+      }
+      if (before < 0) return i == after;  // left of the first sample
+      if (after == samples) return i == before;
+      return i == before || i == after;
     };
     for (long m = 0; m < H; ++m)
       for (long n = 0; n < W; ++n)

@@ -23,6 +23,7 @@
 #include "cli.h"
 #include "sis/hex_projection.h"
 #include "sis/imageio.h"
+#include "sis/memory.h"
 #include "sis/prefetch.h"
 #include "sis/projection.h"
 #include "sis/range.h"
@@ -40,6 +41,61 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// More worker threads than this are refused (each has a stack and buffers;
+// the output is the same for every count).
+constexpr int kMaxThreads = 1024;
+
+// The largest output side (OpenImageIO's image sides are int).
+constexpr long kMaxSide = 2147483647;
+
+// The index of the first value that is NaN or infinite, or -1.
+template <typename T>
+long first_nonfinite(const T* v, std::size_t n) {
+  for (std::size_t q = 0; q < n; ++q)
+    if (!std::isfinite(v[q])) return long(q);
+  return -1;
+}
+
+// "x 3, y 7, channel G" of value q of interleaved rows of `width` pixels.
+std::string value_position(long q, long width, const std::vector<std::string>& names) {
+  const int C = int(std::max<std::size_t>(1, names.size()));
+  const long c = q % C, p = q / C;
+  std::ostringstream m;
+  m << "x " << p % width << ", y " << p / width << ", channel "
+    << (c < long(names.size()) ? names[c] : std::to_string(c));
+  return m.str();
+}
+
+// Refuses a request whose estimated peak memory is more than the process
+// can have (sis/memory.h), before anything large is allocated.
+void check_memory(std::uint64_t needed, const std::string& what, bool verbose) {
+  const std::uint64_t available = available_memory();
+  if (verbose)
+    std::fprintf(stderr, "siproject: memory: about %s needed (%s), %s available\n",
+                 format_bytes(needed).c_str(), what.c_str(),
+                 available == UINT64_MAX ? "no limit" : format_bytes(available).c_str());
+  if (needed > available)
+    throw UsageError("the request needs about " + format_bytes(needed) + " of memory (" + what +
+                     "), more than the " + format_bytes(available) +
+                     " available; ask for a smaller output (--size or --factor)");
+}
+
+// Peak bytes of a projection to a W x H x C output over a coefficient grid
+// of `coefficients` values per channel: while acquiring and resampling, the
+// coefficients (double), the local input range (min and max, float) and
+// the final image (float); while writing, the image, its converted copy
+// and the coefficient file's float grid beside the coefficients; plus the
+// readers' strips and decoders per thread and the program itself.
+std::uint64_t projection_bytes(long W, long H, int C, std::uint64_t coefficients, bool local,
+                               bool coeffs_file, int threads) {
+  // in double: the product of absurd sides passes 2^64
+  const double values = double(W) * double(H) * C, grid = double(coefficients) * C;
+  const double acquire = 8 * grid + (local ? 8 * values : 0) + 4 * values;
+  const double write = 8 * values + (coeffs_file ? 12 * grid : 0);
+  const double bytes = std::max(acquire, write) + threads * double(16 << 20) + double(64 << 20);
+  return bytes < 1.8e19 ? std::uint64_t(bytes) : UINT64_MAX;
+}
+
 struct Options {
   std::vector<std::string> inputs;
   std::string output, coeffs;
@@ -51,6 +107,8 @@ struct Options {
   bool highlight_compress = false;
   std::string lattice = "cartesian", quadrature = "point";
   double density = 1.0;
+  bool factor_given = false;
+  std::string factor_spelling, density_spelling = "1";
   bool lattice_given = false, density_given = false, quadrature_given = false;
   int threads = 0;
   bool verbose = false, quiet = false;
@@ -69,6 +127,8 @@ std::pair<long, long> parse_size(const std::string& s) {
   std::istringstream in(s);
   if (!(in >> w >> x >> h) || (x != 'x' && x != 'X') || (in >> extra) || w < 1 || h < 1)
     throw UsageError("--size '" + s + "': expected WxH with positive whole numbers, e.g. 1000x750");
+  if (w > kMaxSide || h > kMaxSide)
+    throw UsageError("--size '" + s + "': more than " + std::to_string(kMaxSide) + " pixels per side");
   return {w, h};
 }
 
@@ -320,7 +380,14 @@ int run(const Options& o) {
   const auto t_start = Clock::now();
   const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
   if (o.verbose && o.quiet) throw UsageError("-v and -q exclude each other");
-  if (o.factor != 0 && !o.size.empty()) throw UsageError("give --factor or --size, not both");
+  if (o.threads > kMaxThreads)
+    throw UsageError("--threads " + std::to_string(o.threads) + ": at most " +
+                     std::to_string(kMaxThreads));
+  if (o.factor_given && !(std::isfinite(o.factor) && o.factor > 0))
+    throw UsageError("--factor " + o.factor_spelling + ": expected a finite number above 0");
+  if (!(std::isfinite(o.density) && o.density > 0))
+    throw UsageError("--density " + o.density_spelling + ": expected a finite number above 0");
+  if (o.factor_given && !o.size.empty()) throw UsageError("give --factor or --size, not both");
   std::pair<long, long> size{0, 0};
   if (!o.size.empty()) size = parse_size(o.size);
   const bool hex = o.lattice == "hex";
@@ -410,8 +477,13 @@ int run(const Options& o) {
 
   // Several inputs are row bands of one image: each band's data window
   // spans the full width and the bands tile the display window's rows.
+  // Their headers: each file is closed once read (opened again to be read),
+  // so that any number of bands fits the descriptor limit.
   std::vector<std::unique_ptr<ImageReader>> readers;
-  for (const std::string& in : o.inputs) readers.push_back(std::make_unique<ImageReader>(in));
+  for (const std::string& in : o.inputs) {
+    readers.push_back(std::make_unique<ImageReader>(in));
+    readers.back()->release();
+  }
   std::sort(readers.begin(), readers.end(),
             [](const auto& a, const auto& b) { return a->data_y() < b->data_y(); });
   ImageReader& reader = *readers.front();
@@ -448,8 +520,15 @@ int run(const Options& o) {
   }
   auto out_size = [&](long w, long h) -> std::pair<long, long> {
     if (size.first) return size;
-    if (o.factor == 0) return {w, h};
-    const long ow = std::lround(w / o.factor), oh = std::lround(h / o.factor);
+    if (!o.factor_given) return {w, h};
+    const double dw = std::round(w / o.factor), dh = std::round(h / o.factor);
+    if (!(dw <= kMaxSide && dh <= kMaxSide)) {
+      std::ostringstream m;
+      m << "--factor " << o.factor_spelling << ": the output would be " << dw << " x " << dh
+        << " pixels, more than " << kMaxSide << " per side";
+      throw UsageError(m.str());
+    }
+    const long ow = long(dw), oh = long(dh);
     if (ow < 1 || oh < 1) {
       std::ostringstream m;
       m << "--factor " << o.factor << " is larger than the image (" << w << " x " << h << ")";
@@ -492,18 +571,73 @@ int run(const Options& o) {
       throw UsageError(reader.path() + " is a coefficient file: its lattice is recorded in it; "
                        "drop --lattice, --density and --quadrature");
     compressed = reader.attribute("sis:highlight_compress") == "1";
+    const std::uint64_t stored = std::uint64_t(reader.width()) * std::uint64_t(reader.height());
+    check_memory(projection_bytes(0, 0, C, stored + stored / 2, false, false, 1),
+                 "a coefficient grid of " + std::to_string(reader.width()) + " x " +
+                     std::to_string(reader.height()) + " x " + std::to_string(C),
+                 false);
     const auto t = Clock::now();
-    k = read_coefficients(reader);
+    ImageReader file(reader.path());
+    k = read_coefficients(file);
     t_acquire = seconds_since(t);
+    const long bad_c = first_nonfinite(k.c.data.data(), k.c.data.size());
+    if (bad_c >= 0) {
+      const std::string where = reader.path() + ": non-finite coefficient (NaN or Inf) at " +
+                                value_position(bad_c, k.c.width, names);
+      if (o.nonfinite == "error")
+        throw InputError(where + "; use --nonfinite zero to replace them with 0");
+      long count = 0;
+      for (double& v : k.c.data)
+        if (!std::isfinite(v)) v = 0, ++count;
+      if (!o.quiet)
+        std::cerr << "siproject: warning: replaced " << count
+                  << " non-finite coefficients with 0; first: " << where << "\n";
+    }
     // its own size is its frame's (a hexagonal grid also covers a margin)
     if (k.lattice.is_hexagonal())
       std::tie(W, H) = out_size(std::lround(k.image_width), std::lround(k.image_height));
     else
       std::tie(W, H) = out_size(k.c.width, k.c.height);
+    check_memory(projection_bytes(W, H, C, std::uint64_t(k.c.width) * std::uint64_t(k.c.height),
+                                  false, false, threads),
+                 "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
+                     std::to_string(C) + " output",
+                 o.verbose);
   } else {
-    if (o.factor == 0 && !size.first)
+    if (!o.factor_given && !size.first)
       throw UsageError("give the output size: --factor S (output = input / S) or --size WxH");
     std::tie(W, H) = out_size(win, hin);
+    std::uint64_t coefficients = std::uint64_t(W) * std::uint64_t(H);
+    if (hex) {
+      // The hexagonal acquisition sums samples under each lattice point: it
+      // needs at least one sample per lattice step (it has no interpolation
+      // model of the input, as the Cartesian one has where it upsamples),
+      // and a lattice step no larger than the frame.
+      const double h = Lattice::hexagonal(o.density).matrix()[0];
+      const double spacing = std::max(double(W) / double(win), double(H) / double(hin));
+      std::ostringstream m;
+      m.precision(4);
+      if (h < spacing) {
+        m << "--lattice hex: the lattice's step (" << h << " output pixels at --density "
+          << o.density << ") is finer than the input's sample spacing (" << spacing
+          << " output pixels); the hexagonal acquisition needs a sample per lattice step: use "
+             "--density at most "
+          << 2 / (std::sqrt(3.0) * spacing * spacing) << ", or a smaller output";
+        throw UsageError(m.str());
+      }
+      if (h > double(std::min(W, H))) {
+        m << "--density " << o.density << ": the hexagonal lattice's step (" << h
+          << " output pixels) is larger than the " << W << " x " << H << " frame";
+        throw UsageError(m.str());
+      }
+      const HexLayout layout =
+          hex_layout(o.density, double(W), double(H), hex_default_margin(hex_order));
+      coefficients = std::uint64_t(layout.columns) * std::uint64_t(layout.rows);
+    }
+    check_memory(projection_bytes(W, H, C, coefficients, true, !o.coeffs.empty(), threads),
+                 "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
+                     std::to_string(C) + " output",
+                 o.verbose);
     std::unique_ptr<AcquisitionPlan> plan;
     std::unique_ptr<Acquisition> cartesian;
     std::unique_ptr<HexAcquisitionPlan> hex_plan;
@@ -559,12 +693,16 @@ int run(const Options& o) {
       {
         Progress progress(!o.quiet, "reading and acquiring");
         const auto t = Clock::now();
+        // one file open at a time, in row order, on the reading thread
+        std::unique_ptr<ImageReader> file;
         auto read = [&](std::size_t i, int b) {
           const Chunk& ch = chunks[i];
+          if (!file || file->path() != ch.reader->path())
+            file.reset(), file = std::make_unique<ImageReader>(ch.reader->path());
           if (half)
-            ch.reader->read_rows_half(ch.y0, ch.y1, half_rows[b].data());
+            file->read_rows_half(ch.y0, ch.y1, half_rows[b].data());
           else
-            ch.reader->read_rows(ch.y0, ch.y1, float_rows[b].data());
+            file->read_rows(ch.y0, ch.y1, float_rows[b].data());
         };
         ReadAhead ahead(chunks.size(), slots, read);
         // The plan (the weights of every input row and column, some
@@ -630,6 +768,12 @@ int run(const Options& o) {
     parallel_for(long(k.c.data.size()), threads, [&](long q0, long q1) {
       for (long q = q0; q < q1; ++q) k.c.data[q] = static_cast<float>(k.c.data[q]);
     });
+    // Finite samples near float's largest value can still overflow there.
+    const long overflow = first_nonfinite(k.c.data.data(), k.c.data.size());
+    if (overflow >= 0)
+      throw InputError(input_label + ": the samples are too large: the coefficients pass float's "
+                       "largest value (3.4e38) at coefficient " +
+                       value_position(overflow, k.c.width, names) + "; nothing written");
   }
 
   const Display shown = display ? *display : (k.min_error ? Display::antialiased_2x2() : Display::centred());
@@ -665,6 +809,12 @@ int run(const Options& o) {
     }
   }
   const double t_resample = seconds_since(t);
+  // Never a non-finite pixel from finite coefficients without saying so:
+  // resampling or the highlight expansion can pass float's range.
+  const long bad_pixel = first_nonfinite(image.data.data(), image.data.size());
+  if (bad_pixel >= 0)
+    throw InputError(input_label + ": the final image passes float's range at " +
+                     value_position(bad_pixel, W, names) + "; nothing written");
   const bool from_samples = local != nullptr;
   local.reset();  // what is no longer needed goes before the output is written
 
@@ -747,8 +897,9 @@ int main(int argc, char** argv) {
                  "bands of one image (by their data windows, e.g. partial renders cropped with "
                  "oiiotool --crop), projected as one")->required();
   app.add_option("-o,--output", o.output, "output image (.exr half or float, see -d; .png/.jpg/.tif 8-bit sRGB)")->required();
-  app.add_option("--factor", o.factor, "supersampling factor per axis: output = input / S (any real S > 0)")
-      ->check(CLI::PositiveNumber);
+  auto* fac = app.add_option("--factor", o.factor,
+                             "supersampling factor per axis: output = input / S (any real S > 0; "
+                             "S < 1 upsamples: the input's cubic interpolant is projected)");
   app.add_option("--size", o.size, "output size WxH (any ratio to the input)");
   auto* g = app.add_option("--generator", o.generator,
                            "box, tent, quadratic, cubic, bspline:N (N = 0..7), mitchell, gaussian, "
@@ -765,8 +916,9 @@ int main(int argc, char** argv) {
                               "slight blur; better with hex-hat)")
                    ->capture_default_str();
   auto* dens = app.add_option("--density", o.density,
-                              "--lattice hex: lattice points per output pixel")
-                   ->check(CLI::PositiveNumber)->capture_default_str();
+                              "--lattice hex: lattice points per output pixel (at most one "
+                              "per input sample)")
+                   ->capture_default_str();
   auto* m = app.add_option("--method", o.method,
                            "min-error (orthogonal projection, B-spline generators) or conventional "
                            "(normalised weighted average, any generator)")->capture_default_str();
@@ -801,6 +953,9 @@ int main(int argc, char** argv) {
   o.boundary_given = b->count() > 0;
   o.lattice_given = lat->count() > 0;
   o.density_given = dens->count() > 0;
+  o.factor_given = fac->count() > 0;
+  if (o.factor_given) o.factor_spelling = fac->as<std::string>();
+  if (o.density_given) o.density_spelling = dens->as<std::string>();
   o.quadrature_given = quad->count() > 0;
   // A conventional filter named alone means the conventional method.
   if (o.generator_given && !o.method_given) {
@@ -820,6 +975,9 @@ int main(int argc, char** argv) {
   } catch (const OutputError& e) {
     std::cerr << "siproject: " << e.what() << "\n";
     return kExitOutput;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "siproject: out of memory (see -v for the estimate of what the request needs)\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "siproject: " << e.what() << "\n";
     return 1;

@@ -3,6 +3,7 @@
 #include <Imath/half.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -37,8 +38,9 @@ using OIIO::ImageSpec;
 using OIIO::TypeDesc;
 
 struct ImageReader::Impl {
-  std::unique_ptr<ImageInput> in;
+  std::unique_ptr<ImageInput> in;  // null once released
   ImageSpec spec;
+  std::string format;
   // Tiled files: the tile row last read whole (tile-row index, element
   // size; -1 when none), for the rows of a strip that starts or ends inside
   // a tile row (read_tiles takes whole tile rows only).
@@ -51,6 +53,11 @@ ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path)
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path + ": no such file");
   if (fs::is_directory(path, ec)) throw InputError(path + ": is a folder, not an image");
+  // The system's reason first (no permission, too many open files...):
+  // OpenImageIO reports any file it cannot open as one it cannot parse.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
+  ::close(fd);
   impl_->in = ImageInput::open(path);
   if (!impl_->in) {
     std::string why = OIIO::geterror();
@@ -58,6 +65,7 @@ ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path)
     throw InputError(path + ": " + why);
   }
   impl_->spec = impl_->in->spec();
+  impl_->format = impl_->in->format_name();
   const ImageSpec& s = impl_->spec;
   if (s.width < 1 || s.height < 1 || s.nchannels < 1) {
     std::ostringstream m;
@@ -69,8 +77,13 @@ ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path)
   if (s.deep) throw InputError(path + ": deep images are not supported");
 }
 
-ImageReader::~ImageReader() {
-  if (impl_ && impl_->in) impl_->in->close();
+ImageReader::~ImageReader() { release(); }
+
+void ImageReader::release() {
+  if (impl_ && impl_->in) {
+    impl_->in->close();
+    impl_->in.reset();
+  }
 }
 
 long ImageReader::width() const { return impl_->spec.width; }
@@ -83,7 +96,7 @@ long ImageReader::full_y() const { return impl_->spec.full_y; }
 long ImageReader::full_width() const { return impl_->spec.full_width; }
 long ImageReader::full_height() const { return impl_->spec.full_height; }
 int ImageReader::alpha_channel() const { return impl_->spec.alpha_channel; }
-std::string ImageReader::format_name() const { return impl_->in->format_name(); }
+std::string ImageReader::format_name() const { return impl_->format; }
 std::vector<std::string> ImageReader::channel_names() const { return impl_->spec.channelnames; }
 std::string ImageReader::attribute(const std::string& name) const {
   return impl_->spec.get_string_attribute(name);
@@ -137,6 +150,7 @@ void ImageReader::read(long y0, long y1, SampleFormat format, void* rows) {
     throw InputError(m.str());
   }
   if (y1 == y0) return;
+  if (!impl_->in) throw std::logic_error(path_ + ": read after release()");
   // Samples stored as asked are read as stored (TypeDesc::UNKNOWN), straight
   // into `rows`: OpenImageIO 2.4 stages any call that names a type, even the
   // stored one, through a buffer (a fresh one per call for scanlines).
@@ -226,19 +240,17 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
   const int T = int(std::clamp<long>(workers, 1, std::max(1L, bands.count())));
   std::optional<ExrThreadsOff> off;  // for the readers opened here and by the threads
   if (T > 1) off.emplace();
-  std::vector<std::vector<std::unique_ptr<ImageReader>>> sets(T);
-  for (const std::string& p : paths) sets[0].push_back(std::make_unique<ImageReader>(p));
   std::vector<long> start(1, 0);  // each file's first row in the image
   std::size_t values = 0;         // largest strip
-  for (const auto& r : sets[0]) {
-    if (T > 1 && r->format_name() != "openexr")
-      throw std::logic_error(r->path() +
+  for (const std::string& p : paths) {  // one file open at a time
+    ImageReader r(p);
+    if (T > 1 && r.format_name() != "openexr")
+      throw std::logic_error(r.path() +
                              ": read_bands() with several workers on a file not OpenEXR");
-    if (half && !r->stores_half())
-      throw std::logic_error(r->path() + ": read_bands() with half on samples not stored as half");
-    start.push_back(start.back() + r->height());
-    values =
-        std::max(values, std::size_t(std::min(strip, r->height())) * r->width() * r->channels());
+    if (half && !r.stores_half())
+      throw std::logic_error(r.path() + ": read_bands() with half on samples not stored as half");
+    start.push_back(start.back() + r.height());
+    values = std::max(values, std::size_t(std::min(strip, r.height())) * r.width() * r.channels());
   }
   if (start.back() != bands.rows())
     throw std::logic_error("read_bands(): the files hold " + std::to_string(start.back()) +
@@ -254,15 +266,21 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
   long error_band = LONG_MAX;
   std::exception_ptr error;
   auto worker = [&](int t) {
-    auto& readers = sets[t];
+    // This worker's readers, opened as its bands reach their files and
+    // closed once its bands (taken in increasing order) have passed them:
+    // a worker holds the files of one band open, whatever their count.
+    std::vector<std::unique_ptr<ImageReader>> readers(paths.size());
+    auto reader = [&](std::size_t f) -> ImageReader& {
+      for (std::size_t e = 0; e < f; ++e) readers[e].reset();
+      if (!readers[f]) readers[f] = std::make_unique<ImageReader>(paths[f]);
+      return *readers[f];
+    };
     Buffer<std::uint16_t> half_rows(half ? values : 0);  // unset: each strip is read into them
     Buffer<float> float_rows(half ? 0 : values);
     for (;;) {
       const long b = next++;
       if (b >= bands.count() || b > stop.load()) return;
       try {
-        if (readers.empty())
-          for (const std::string& p : paths) readers.push_back(std::make_unique<ImageReader>(p));
         cb.begin(t, b);
         bool whole = true;
         for (long y = bands.begin(b); y < bands.end(b);) {
@@ -273,9 +291,9 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
           const long y1 = std::min({(y0 / strip + 1) * strip, bands.end(b) - start[f],
                                     start[f + 1] - start[f]});
           if (half)
-            readers[f]->read_rows_half(y0, y1, half_rows.data());
+            reader(f).read_rows_half(y0, y1, half_rows.data());
           else
-            readers[f]->read_rows(y0, y1, float_rows.data());
+            reader(f).read_rows(y0, y1, float_rows.data());
           if (!cb.strip(t, Strip{f, &paths[f], y0, y1, y, half ? half_rows.data() : nullptr,
                                  half ? nullptr : float_rows.data()})) {
             whole = false;
@@ -548,6 +566,12 @@ StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
   return stage_image(path, grid, channel_names, md);
 }
 
+namespace {
+// The largest frame side a coefficient file may record (OpenImageIO's
+// images have int sides).
+constexpr double kMaxFrame = 2147483647.0;
+}  // namespace
+
 bool is_coefficient_file(const ImageReader& r) { return r.attribute("sis:coefficients") == "1"; }
 
 Coefficients read_coefficients(ImageReader& r) {
@@ -577,6 +601,14 @@ Coefficients read_coefficients(ImageReader& r) {
     k.min_error = r.attribute("sis:method") != "conventional";
     k.image_width = numbers("sis:image_width", 1)[0];
     k.image_height = numbers("sis:image_height", 1)[0];
+    if (!(k.image_width >= 1 && k.image_height >= 1 && k.image_width <= kMaxFrame &&
+          k.image_height <= kMaxFrame))
+      throw std::invalid_argument("sis:image_width and sis:image_height must lie in [1, " +
+                                  std::to_string(long(kMaxFrame)) + "]");
+    const double det = k.lattice.determinant();
+    if (!std::isfinite(o[0]) || !std::isfinite(o[1]) || !std::isfinite(det) || !(det != 0))
+      throw std::invalid_argument("sis:lattice_origin and sis:lattice_matrix must be finite, the "
+                                  "matrix invertible");
   } catch (const std::invalid_argument& e) {
     throw InputError(r.path() + ": coefficient file metadata: " + e.what());
   }

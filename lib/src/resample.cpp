@@ -29,10 +29,16 @@ Display Display::parse(const std::string& s) {
           !std::isfinite(dy))
         throw std::invalid_argument("display '" + s + "': offset '" + item +
                                     "' is not DX,DY (final pixels)");
+      if (std::abs(dx) > kMaxDisplayOffset || std::abs(dy) > kMaxDisplayOffset)
+        throw std::invalid_argument("display '" + s + "': offset '" + item +
+                                    "' lies outside [-1, 1] final pixels");
       d.offsets.push_back({dx, dy});
     }
     if (d.offsets.empty())
       throw std::invalid_argument("display '" + s + "': no offsets after 'offsets:'");
+    if (d.offsets.size() > kMaxDisplayOffsets)
+      throw std::invalid_argument("display '" + s + "': " + std::to_string(d.offsets.size()) +
+                                  " offsets, more than " + std::to_string(kMaxDisplayOffsets));
     return d;
   }
   throw std::invalid_argument("unknown display '" + s +

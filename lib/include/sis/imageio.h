@@ -49,6 +49,9 @@ class ImageReader {
   ~ImageReader();
   ImageReader(const ImageReader&) = delete;
   ImageReader& operator=(const ImageReader&) = delete;
+  // Closes the file (its descriptor and decoder); the header stays readable,
+  // reading then is a logic_error.
+  void release();
 
   const std::string& path() const { return path_; }
   long width() const;

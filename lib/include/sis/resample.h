@@ -12,6 +12,13 @@
 
 namespace sis {
 
+// A display's offsets reach at most the neighbouring pixels' centres (a
+// pixel's own samples lie within half a pixel; an offset beyond one pixel
+// samples another pixel's content), and a pixel averages at most 1024 of
+// them (each one costs a full resampling pass).
+inline constexpr double kMaxDisplayOffset = 1.0;
+inline constexpr std::size_t kMaxDisplayOffsets = 1024;
+
 struct Display {
   enum class Mode {
     Points,        // mean of f_app at centre + each offset
@@ -25,8 +32,9 @@ struct Display {
     return {Mode::Points, {{-0.25, -0.25}, {0.25, -0.25}, {-0.25, 0.25}, {0.25, 0.25}}};
   }
   static Display pixel() { return {Mode::PixelAverage, {}}; }
-  // "centred", "2x2", "pixel" or "offsets:DX,DY;DX,DY;..."; throws
-  // std::invalid_argument naming the spelling.
+  // "centred", "2x2", "pixel" or "offsets:DX,DY;DX,DY;..." (each offset
+  // within kMaxDisplayOffset of the centre, at most kMaxDisplayOffsets of
+  // them); throws std::invalid_argument naming the spelling.
   static Display parse(const std::string& spelling);
   std::string name() const;
 };

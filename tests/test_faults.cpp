@@ -1,0 +1,483 @@
+// Faults and hostile input, through the built siproject: tiled inputs, a
+// full disk, signals during the write, planted links, one file under two
+// spellings, upsampling, results that are not finite, absurd options, and
+// the descriptor and memory limits. Each asserts the promise: a clear error
+// naming the file or option, the exit status, nothing lost, nothing left.
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+#include <signal.h>
+#include <sys/mount.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "sis/imageio.h"
+#include "support.h"
+
+namespace fs = std::filesystem;
+using namespace sis;
+using namespace sis::test;
+
+#ifndef SIPROJECT
+#error "SIPROJECT must name the siproject binary"
+#endif
+
+namespace {
+
+Result run(const std::string& args) { return run_tool(SIPROJECT, args); }
+// A shell command line (limits set with ulimit before the tool), in a
+// subshell: the output's redirection is made before any limit.
+Result shell(const std::string& line) { return run_tool("", "(" + line + ")"); }
+
+class Faults : public TempDirTest {};
+
+// An EXR of `img`, half or float, in scanlines or tiles of tw x th, with a
+// data window starting at row y of a display window of full_h rows (0: the
+// image's own).
+void write_exr(const std::string& path, const Image& img, bool half, int tw = 0, int th = 0,
+               int y = 0, int full_h = 0) {
+  OIIO::ImageSpec spec(int(img.width), int(img.height), img.channels,
+                       half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
+  if (tw > 0) {
+    spec.tile_width = tw;
+    spec.tile_height = th;
+  }
+  spec.y = y;
+  spec.full_y = 0;
+  spec.full_height = full_h > 0 ? full_h : int(img.height);
+  auto out = OIIO::ImageOutput::create(path);
+  ASSERT_TRUE(out && out->open(path, spec) &&
+              out->write_image(OIIO::TypeDesc::FLOAT, img.data.data()) && out->close())
+      << path;
+}
+
+// The samples of an image file as float (its first subimage and level).
+std::vector<float> pixels(const std::string& path) {
+  const Image img = read_image(path);
+  return std::vector<float>(img.data.begin(), img.data.end());
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void put(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+// Files of the folder that a staged write leaves while it runs.
+std::vector<std::string> staged(const std::string& dir) {
+  std::vector<std::string> v;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().filename().string().find(".sis-") != std::string::npos)
+      v.push_back(e.path().filename().string());
+  return v;
+}
+
+}  // namespace
+
+TEST_F(Faults, ReaderReadsAnyRowsOfTiledFiles) {
+  // read_rows of any [y0, y1) of tiled files (tiles that do not divide the
+  // image, cut tile rows at both ends, one tile row, the last partial one)
+  // equals the same rows of the scanline file, half and float.
+  const Image img = random_image(203, 157, 3, 11);
+  write_exr(path("scanh.exr"), img, true);
+  write_exr(path("scanf.exr"), img, false);
+  for (int t : {16, 64, 100})
+    for (bool half : {true, false}) {
+      const std::string name = path("t" + std::to_string(t) + (half ? "h" : "f") + ".exr");
+      write_exr(name, img, half, t, t);
+      ImageReader tiled(name), scan(path(half ? "scanh.exr" : "scanf.exr"));
+      ASSERT_EQ(tiled.tile_height(), t);
+      for (auto [y0, y1] : {std::pair<long, long>{0, 157}, {0, 1}, {3, 5}, {15, 17}, {16, 64},
+                            {17, 140}, {99, 101}, {100, 157}, {140, 157}, {156, 157}}) {
+        std::vector<float> a(std::size_t(y1 - y0) * 203 * 3), b(a.size());
+        tiled.read_rows(y0, y1, a.data());
+        scan.read_rows(y0, y1, b.data());
+        ASSERT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * 4)) << name << " " << y0 << " " << y1;
+        if (half) {
+          std::vector<std::uint16_t> ha(a.size()), hb(a.size());
+          tiled.read_rows_half(y0, y1, ha.data());
+          scan.read_rows_half(y0, y1, hb.data());
+          ASSERT_EQ(ha, hb) << name << " " << y0 << " " << y1;
+        }
+      }
+    }
+}
+
+TEST_F(Faults, TiledInputsAtEveryTileSizeAndThreadCount) {
+  // Tiles of 16 to 256 (100 divides neither the image nor the 256-row
+  // bands), half and float, and a mipmapped texture from oiiotool -otex: at
+  // 1, 2, 3 and 8 threads the output equals the scanline file's, bit for bit.
+  const Image img = random_image(700, 530, 3, 5);
+  write_exr(path("scan.exr"), img, true);
+  ASSERT_EQ(run(path("scan.exr") + " -o " + path("ref.exr") + " --factor 3 -d float -q").status, 0);
+  const std::vector<float> ref = pixels(path("ref.exr"));
+  std::vector<std::string> inputs;
+  for (int t : {16, 64, 100, 128, 256}) {
+    inputs.push_back(path("t" + std::to_string(t) + ".exr"));
+    write_exr(inputs.back(), img, true, t, t);
+  }
+  write_exr(path("t100x48.exr"), img, true, 100, 48);
+  inputs.push_back(path("t100x48.exr"));
+  const Result tex = shell("oiiotool " + path("scan.exr") + " -otex " + path("tex.exr"));
+  ASSERT_EQ(tex.status, 0) << tex.output;
+  inputs.push_back(path("tex.exr"));
+  for (const std::string& in : inputs)
+    for (int threads : {1, 2, 3, 8}) {
+      const Result r = run(in + " -o " + path("out.exr") + " --factor 3 -d float -q --threads " +
+                           std::to_string(threads));
+      ASSERT_EQ(r.status, 0) << in << " threads " << threads << ": " << r.output;
+      ASSERT_EQ(pixels(path("out.exr")), ref) << in << " threads " << threads;
+    }
+  // float samples, tiled
+  write_exr(path("scanf.exr"), img, false);
+  write_exr(path("tf.exr"), img, false, 100, 100);
+  ASSERT_EQ(run(path("scanf.exr") + " -o " + path("reff.exr") + " --factor 3 -q").status, 0);
+  for (int threads : {1, 2, 3}) {
+    const Result r = run(path("tf.exr") + " -o " + path("outf.exr") + " --factor 3 -q --threads " +
+                         std::to_string(threads));
+    ASSERT_EQ(r.status, 0) << r.output;
+    ASSERT_EQ(pixels(path("outf.exr")), pixels(path("reff.exr"))) << threads;
+  }
+  // the hexagonal lattice reads tiles too
+  ASSERT_EQ(run(path("scan.exr") + " -o " + path("hexref.exr") + " --factor 3 --lattice hex -q").status, 0);
+  const Result h = run(path("t100.exr") + " -o " + path("hex.exr") + " --factor 3 --lattice hex -q");
+  ASSERT_EQ(h.status, 0) << h.output;
+  EXPECT_EQ(pixels(path("hex.exr")), pixels(path("hexref.exr")));
+}
+
+namespace {
+
+// A tmpfs of `bytes` mounted on a folder of the test's (root only).
+class SmallDisk {
+ public:
+  SmallDisk(const std::string& dir, long bytes) : dir_(dir) {
+    fs::create_directory(dir);
+    const std::string opts = "size=" + std::to_string(bytes);
+    mounted_ = ::mount("tmpfs", dir.c_str(), "tmpfs", 0, opts.c_str()) == 0;
+  }
+  ~SmallDisk() {
+    if (mounted_) ::umount2(dir_.c_str(), MNT_DETACH);
+  }
+  bool mounted() const { return mounted_; }
+
+ private:
+  std::string dir_;
+  bool mounted_ = false;
+};
+
+}  // namespace
+
+TEST_F(Faults, FullDiskIsAnOutputErrorAndTheOldFileStays) {
+  // A 256 KB filesystem and outputs of about 1 MB (noise does not
+  // compress): every format fails with status 4 and the system's reason,
+  // the file that had the name is as it was, and no other file is left.
+  const std::string disk = path("disk");
+  SmallDisk d(disk, 256 * 1024);
+  if (!d.mounted()) GTEST_SKIP() << "mounting a tmpfs needs root";
+  write_exr(path("noise.exr"), random_image(600, 600, 3, 3), false);
+  for (const std::string ext : {"png", "exr", "jpg", "tif"}) {
+    const std::string out = disk + "/o." + ext;
+    put(out, "the old file");
+    const Result r = run(path("noise.exr") + " -o " + out + " --factor 1 --generator tent -q");
+    EXPECT_EQ(r.status, 4) << ext << ": " << r.output;
+    EXPECT_NE(r.output.find(out), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("No space left on device"), std::string::npos) << r.output;
+    EXPECT_EQ(slurp(out), "the old file") << ext;
+    fs::remove(out);
+    EXPECT_TRUE(fs::is_empty(disk)) << ext;
+  }
+  // the coefficient file does not fit: neither output replaces its file
+  put(disk + "/o.png", "old image");
+  put(disk + "/c.exr", "old coefficients");
+  const Result r = run(path("noise.exr") + " -o " + disk + "/o.png --coeffs " + disk +
+                       "/c.exr --factor 1 -q");
+  EXPECT_EQ(r.status, 4) << r.output;
+  EXPECT_EQ(slurp(disk + "/o.png"), "old image");
+  EXPECT_EQ(slurp(disk + "/c.exr"), "old coefficients");
+  EXPECT_TRUE(staged(disk).empty());
+}
+
+TEST_F(Faults, FullDiskAtTheLastBlock) {
+  // The disk holds all of the output but its last page: the failure comes
+  // at the writer's end (the EXR's last chunk, the PNG's last block).
+  const std::string disk = path("disk");
+  SmallDisk d(disk, 4 << 20);
+  if (!d.mounted()) GTEST_SKIP() << "mounting a tmpfs needs root";
+  write_exr(path("noise.exr"), random_image(300, 300, 3, 4), false);
+  for (const std::string ext : {"exr", "png"}) {
+    const std::string args = " --factor 1 --generator tent -q";
+    ASSERT_EQ(run(path("noise.exr") + " -o " + path("full." + ext) + args).status, 0);
+    const long size = long(fs::file_size(path("full." + ext)));
+    put(disk + "/o." + ext, "the old file");
+    // tmpfs counts whole pages: leave the output's pages less one
+    const long page = 4096, free_now = long(fs::space(disk).available);
+    const long leave = ((size + page - 1) / page - 1) * page;
+    ASSERT_GT(free_now, leave);
+    put(disk + "/filler", std::string(std::size_t(free_now - leave), 'x'));
+    ASSERT_EQ(long(fs::space(disk).available), leave);
+    const Result r = run(path("noise.exr") + " -o " + disk + "/o." + ext + args);
+    EXPECT_EQ(r.status, 4) << ext << ": " << r.output;
+    EXPECT_NE(r.output.find("No space left on device"), std::string::npos) << r.output;
+    EXPECT_EQ(slurp(disk + "/o." + ext), "the old file");
+    EXPECT_TRUE(staged(disk).empty()) << ext;
+    fs::remove(disk + "/filler");
+    fs::remove(disk + "/o." + ext);
+  }
+}
+
+TEST_F(Faults, SignalsDuringTheWriteLeaveNoFile) {
+  // siproject is stopped the moment its staged output appears, sent the
+  // signal, and let go: it ends by that signal, its staged file is gone and
+  // the file that had the output's name is as it was.
+  write_exr(path("big.exr"), random_image(1600, 1600, 3, 9), false);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    put(path("o.exr"), "the old file");
+    const pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      const std::string in = path("big.exr"), out = path("o.exr");
+      execl(SIPROJECT, SIPROJECT, in.c_str(), "-o", out.c_str(), "--factor", "1", "-d", "float",
+            "-q", static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    bool seen = false;
+    const auto start = std::chrono::steady_clock::now();
+    while (!seen && std::chrono::steady_clock::now() - start < std::chrono::seconds(120)) {
+      if (!staged(dir_).empty()) {
+        ::kill(pid, SIGSTOP);
+        seen = true;
+        break;
+      }
+      int st;
+      if (waitpid(pid, &st, WNOHANG) == pid) break;
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    ASSERT_TRUE(seen) << "signal " << sig << ": no staged file appeared";
+    ::kill(pid, sig);
+    ::kill(pid, SIGCONT);
+    int st = 0;
+    ASSERT_EQ(waitpid(pid, &st, 0), pid);
+    EXPECT_TRUE(WIFSIGNALED(st) && WTERMSIG(st) == sig) << "signal " << sig << ", status " << st;
+    EXPECT_TRUE(staged(dir_).empty()) << "signal " << sig;
+    EXPECT_EQ(slurp(path("o.exr")), "the old file") << "signal " << sig;
+  }
+}
+
+TEST_F(Faults, PlantedLinksAreNeverFollowed) {
+  // Another user of the output folder plants links at the names a
+  // temporary file could take (the pid-based name of a predictable scheme)
+  // before siproject starts: the file they point to is untouched, the
+  // output is written whole, and the links stay as they were.
+  write_exr(path("in.exr"), random_image(64, 64, 3, 2), false);
+  put(path("victim"), "precious");
+  int ready[2];
+  ASSERT_EQ(pipe(ready), 0);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    char c;
+    close(ready[1]);
+    if (read(ready[0], &c, 1) != 1) _exit(126);
+    const std::string in = path("in.exr"), out = path("o.exr");
+    execl(SIPROJECT, SIPROJECT, in.c_str(), "-o", out.c_str(), "--factor", "2", "-q",
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  close(ready[0]);
+  const std::string id = std::to_string(pid);
+  for (const std::string& name : std::vector<std::string>{".o.tmp" + id + ".exr", ".o.exr.tmp" + id, "o.exr.tmp", ".o.tmp.exr"})
+    fs::create_symlink(path("victim"), path(name));
+  ASSERT_EQ(write(ready[1], "x", 1), 1);
+  close(ready[1]);
+  int st = 0;
+  ASSERT_EQ(waitpid(pid, &st, 0), pid);
+  EXPECT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 0) << st;
+  EXPECT_EQ(slurp(path("victim")), "precious");
+  EXPECT_EQ(pixels(path("o.exr")).size(), 32u * 32 * 3);
+  EXPECT_TRUE(fs::is_symlink(path(".o.tmp" + id + ".exr")));
+}
+
+TEST_F(Faults, OneFileUnderTwoSpellings) {
+  // The same new file as -o and --coeffs, spelt relative and absolute,
+  // through "..", and the input under another name (a hard link, a
+  // symbolic link): a usage error before anything is written.
+  write_exr(path("in.exr"), random_image(32, 32, 3, 2), false);
+  fs::create_directory(path("sub"));
+  fs::create_hard_link(path("in.exr"), path("hard.exr"));
+  fs::create_symlink(path("in.exr"), path("soft.exr"));
+  const std::string before = slurp(path("in.exr"));
+  const std::string cd = "cd " + dir_ + " && " + SIPROJECT + " in.exr --factor 2 ";
+  for (const std::string& args : std::vector<std::string>{
+           "-o o.exr --coeffs " + dir_ + "/o.exr", "-o ./o.exr --coeffs sub/../o.exr",
+        "-o " + dir_ + "/sub/../o.exr --coeffs o.exr", "-o hard.exr", "-o soft.exr",
+        "-o o.exr --coeffs hard.exr"}) {
+    const Result r = shell(cd + args);
+    EXPECT_EQ(r.status, 2) << args << ": " << r.output;
+    EXPECT_TRUE(r.output.find("is the output file") != std::string::npos ||
+                r.output.find("is the input file") != std::string::npos)
+        << args << ": " << r.output;
+    EXPECT_FALSE(fs::exists(path("o.exr"))) << args;
+    EXPECT_EQ(slurp(path("in.exr")), before) << args;
+  }
+}
+
+TEST_F(Faults, UpsamplingIsAProjectionOfTheInterpolant) {
+  // Factors below 1: a flat image stays flat by the default method and
+  // every generator (the library's test asserts ramps and the exact inner
+  // products); the hexagonal lattice, which has no interpolation model,
+  // refuses with the option to change.
+  Image flat(40, 30, 3);
+  std::fill(flat.data.begin(), flat.data.end(), 0.5f);
+  write_exr(path("flat.exr"), flat, false);
+  for (const std::string args : {"--factor 0.5", "--factor 0.3", "--size 100x31",
+                                 "--factor 0.5 --generator tent", "--factor 0.5 --generator box",
+                                 "--factor 0.25 --generator mitchell"}) {
+    const Result r = run(path("flat.exr") + " -o " + path("up.exr") + " -q " + args);
+    ASSERT_EQ(r.status, 0) << args << ": " << r.output;
+    for (float v : pixels(path("up.exr"))) ASSERT_NEAR(v, 0.5f, 1e-6f) << args;
+  }
+  const Result h = run(path("flat.exr") + " -o " + path("hex.exr") + " --factor 0.5 --lattice hex");
+  EXPECT_EQ(h.status, 2) << h.output;
+  EXPECT_NE(h.output.find("--density"), std::string::npos) << h.output;
+  EXPECT_FALSE(fs::exists(path("hex.exr")));
+}
+
+TEST_F(Faults, ResultsThatAreNotFiniteAreErrors) {
+  // Finite samples of +-3.3e38 (a checker of output pixels) overflow
+  // in the coefficients; a coefficient file holding a NaN, and one whose
+  // highlight expansion passes float's range: status 3, the file and the
+  // position named, nothing written.
+  Image huge(64, 64, 3);
+  for (long y = 0; y < 64; ++y)
+    for (long x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) huge.at(x, y, c) = ((x / 4 + y / 4) % 2 ? 3.3e38f : -3.3e38f);
+  write_exr(path("huge.exr"), huge, false);
+  Result r = run(path("huge.exr") + " -o " + path("o.exr") + " --factor 4");
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_NE(r.output.find("huge.exr"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("too large"), std::string::npos) << r.output;
+  r = run(path("huge.exr") + " -o " + path("o.exr") + " --factor 4 --generator mitchell");
+  EXPECT_EQ(r.status, 0) << "a conventional filter's average stays in range: " << r.output;
+  fs::remove(path("o.exr"));
+
+  Coefficients k;
+  k.c = Grid<double>(16, 12, 3);
+  std::fill(k.c.data.begin(), k.c.data.end(), 0.5);
+  k.image_width = 16;
+  k.image_height = 12;
+  k.c.at(5, 3, 1) = NAN;
+  write_coefficients(path("nan.exr"), k, {"R", "G", "B"});
+  r = run(path("nan.exr") + " -o " + path("o.exr"));
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_NE(r.output.find("nan.exr: non-finite coefficient"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("x 5, y 3, channel G"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("o.exr")));
+  r = run(path("nan.exr") + " -o " + path("o.exr") + " --nonfinite zero");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("replaced 1 non-finite"), std::string::npos) << r.output;
+  for (float v : pixels(path("o.exr"))) ASSERT_TRUE(std::isfinite(v));
+  fs::remove(path("o.exr"));
+
+  k.c.at(5, 3, 1) = 1e4;  // in the compressed domain: expands past float
+  write_coefficients(path("hot.exr"), k, {"R", "G", "B"}, {{"sis:highlight_compress", "1"}});
+  r = run(path("hot.exr") + " -o " + path("o.exr") + " -d float");
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_NE(r.output.find("passes float's range"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("o.exr")));
+  EXPECT_TRUE(staged(dir_).empty());
+}
+
+TEST_F(Faults, AbsurdOptionsAreRefusedAtOnce) {
+  // Each is a usage error (status 2) naming its option, well inside the
+  // minute each is given (some spun for minutes or wrote a blank image).
+  write_exr(path("in.exr"), random_image(64, 64, 3, 1), false);
+  std::string many = "offsets:";
+  for (int i = 0; i < 2000; ++i) many += (i ? ";" : "") + std::string("0.1,0.1");
+  const std::pair<std::string, std::string> cases[] = {
+      {"--factor 2 --lattice hex --density 1e30", "--density"},
+      {"--factor 2 --lattice hex --density 1e36", "--density"},
+      {"--factor 2 --lattice hex --density 1e-30", "--density"},
+      {"--factor 2 --lattice hex --density 0", "--density"},
+      {"--factor 2 --lattice hex --density -1", "--density"},
+      {"--factor 2 --lattice hex --density nan", "--density"},
+      {"--factor 2 --lattice hex --density inf", "--density"},
+      {"--factor 2 --display offsets:1e9,0", "offset"},
+      {"--factor 2 --display offsets:0,-1.5", "offset"},
+      {"--factor 2 --display offsets:nan,0", "offset"},
+      {"--factor 2 --display '" + many + "'", "offsets"},
+      {"--factor 2 --threads 100000", "--threads"},
+      {"--factor 1e-300", "--factor"},
+      {"--factor 0", "--factor"},
+      {"--factor -2", "--factor"},
+      {"--factor nan", "--factor"},
+      {"--factor inf", "--factor"},
+      {"--size 3000000000x2", "--size"},
+      {"--size 0x5", "--size"},
+  };
+  for (const auto& [args, name] : cases) {
+    const auto t = std::chrono::steady_clock::now();
+    const Result r = shell("timeout 60 " + std::string(SIPROJECT) + " " + path("in.exr") + " -o " +
+                           path("o.exr") + " " + args);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    EXPECT_EQ(r.status, 2) << args << " (" << s << " s): " << r.output;
+    EXPECT_NE(r.output.find(name), std::string::npos) << args << ": " << r.output;
+    EXPECT_FALSE(fs::exists(path("o.exr"))) << args;
+  }
+}
+
+TEST_F(Faults, ManyBandsWithinTheDescriptorLimit) {
+  // 100 row bands of 8 rows at 16 threads, under a limit of 64 open files:
+  // each file is open only while its rows are read, so the result is the
+  // single file's, bit for bit.
+  const Image img = random_image(64, 800, 3, 8);
+  write_exr(path("whole.exr"), img, true);
+  std::string bands;
+  for (int b = 0; b < 100; ++b) {
+    Image band(64, 8, 3);
+    std::copy(img.row(8 * b), img.row(8 * b + 8), band.data.begin());
+    const std::string name = path("b" + std::to_string(b) + ".exr");
+    write_exr(name, band, true, 0, 0, 8 * b, 800);
+    bands += " " + name;
+  }
+  ASSERT_EQ(run(path("whole.exr") + " -o " + path("ref.exr") + " --factor 2 -q").status, 0);
+  for (const std::string lattice : {"", " --lattice hex"}) {
+    const Result r = shell("ulimit -n 64; " + std::string(SIPROJECT) + bands + " -o " +
+                           path("o.exr") + " --factor 2 -q --threads 16" + lattice);
+    ASSERT_EQ(r.status, 0) << lattice << ": " << r.output;
+    if (lattice.empty()) {
+      EXPECT_EQ(pixels(path("o.exr")), pixels(path("ref.exr")));
+    }
+  }
+  fs::remove(path("o.exr"));
+  // With a limit of 4 (one descriptor beyond the standard streams) the
+  // second worker cannot open its band's file: the error names the file
+  // and the system's reason.
+  const Result r = shell("ulimit -n 4; " + std::string(SIPROJECT) + bands + " -o " +
+                         path("o.exr") + " --factor 2 --threads 2");
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_NE(r.output.find(".exr: cannot open: Too many open files"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("o.exr")));
+}
+
+TEST_F(Faults, RequestsTooLargeForMemoryAreRefused) {
+  // Under a 2 GB address-space limit a 20000 x 20000 output (about 9 GB)
+  // is refused before it is allocated: status 2, the estimate and the way
+  // out named, nothing written.
+  write_exr(path("in.exr"), random_image(64, 64, 3, 1), false);
+  const Result r = shell("ulimit -v 2000000; " + std::string(SIPROJECT) + " " + path("in.exr") +
+                         " -o " + path("o.exr") + " --size 20000x20000");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("of memory"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--size"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("o.exr")));
+}
