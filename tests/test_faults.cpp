@@ -7,7 +7,9 @@
 
 #include <OpenImageIO/imageio.h>
 #include <signal.h>
+#include <fcntl.h>
 #include <sys/mount.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -35,6 +37,28 @@ Result run(const std::string& args) { return run_tool(SIPROJECT, args); }
 // A shell command line (limits set with ulimit before the tool), in a
 // subshell: the output's redirection is made before any limit.
 Result shell(const std::string& line) { return run_tool("", "(" + line + ")"); }
+
+// Runs siproject with `args` under a descriptor limit of `files`, every
+// descriptor but the standard streams closed first (whatever the test
+// runner left open), its output to `log`; its exit status.
+int run_with_files(const std::vector<std::string>& args, long files, const std::string& log) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd < 0 || dup2(fd, 1) < 0 || dup2(fd, 2) < 0) _exit(126);
+    for (int f = 3; f < 65536; ++f) ::close(f);
+    const rlimit r{rlim_t(files), rlim_t(files)};
+    if (setrlimit(RLIMIT_NOFILE, &r) != 0) _exit(126);
+    std::vector<char*> argv{const_cast<char*>(SIPROJECT)};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(SIPROJECT, argv.data());
+    _exit(127);
+  }
+  int st = 0;
+  if (pid < 0 || waitpid(pid, &st, 0) != pid) return -1;
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
 
 class Faults : public TempDirTest {};
 
@@ -233,6 +257,29 @@ TEST_F(Faults, FullDiskAtTheLastBlock) {
     fs::remove(disk + "/filler");
     fs::remove(disk + "/o." + ext);
   }
+}
+
+TEST_F(Faults, FileSizeLimitAndReadOnlyFolder) {
+  // A write past ulimit -f is an output error (EFBIG; SIGXFSZ would end the
+  // process and leave the staged file); a read-only filesystem is one at
+  // the staged file's creation. The old file stays, nothing is left.
+  write_exr(path("noise.exr"), random_image(300, 300, 3, 4), false);
+  put(path("o.exr"), "the old file");
+  const Result r = shell("ulimit -f 64; " + std::string(SIPROJECT) + " " + path("noise.exr") +
+                         " -o " + path("o.exr") + " --factor 1 -q");
+  EXPECT_EQ(r.status, 4) << r.output;
+  EXPECT_NE(r.output.find("File too large"), std::string::npos) << r.output;
+  EXPECT_EQ(slurp(path("o.exr")), "the old file");
+  EXPECT_TRUE(staged(dir_).empty());
+  const std::string ro = path("ro");
+  fs::create_directory(ro);
+  if (::mount("tmpfs", ro.c_str(), "tmpfs", MS_RDONLY, "size=65536") != 0)
+    GTEST_SKIP() << "mounting a tmpfs needs root";
+  const Result w = run(path("noise.exr") + " -o " + ro + "/o.png --factor 2 -q");
+  ::umount2(ro.c_str(), MNT_DETACH);
+  EXPECT_EQ(w.status, 4) << w.output;
+  EXPECT_NE(w.output.find(ro + "/o.png: cannot create a file in folder"), std::string::npos) << w.output;
+  EXPECT_NE(w.output.find("Read-only file system"), std::string::npos) << w.output;
 }
 
 TEST_F(Faults, SignalsDuringTheWriteLeaveNoFile) {
@@ -462,10 +509,13 @@ TEST_F(Faults, ManyBandsWithinTheDescriptorLimit) {
   // With a limit of 4 (one descriptor beyond the standard streams) the
   // second worker cannot open its band's file: the error names the file
   // and the system's reason.
-  const Result r = shell("ulimit -n 4; " + std::string(SIPROJECT) + bands + " -o " +
-                         path("o.exr") + " --factor 2 --threads 2");
-  EXPECT_EQ(r.status, 3) << r.output;
-  EXPECT_NE(r.output.find(".exr: cannot open: Too many open files"), std::string::npos) << r.output;
+  std::vector<std::string> args;
+  for (int b = 0; b < 100; ++b) args.push_back(path("b" + std::to_string(b) + ".exr"));
+  for (const char* a : {"-o", "", "--factor", "2", "--threads", "2"}) args.push_back(a);
+  args[101] = path("o.exr");
+  EXPECT_EQ(run_with_files(args, 4, path("log")), 3);
+  const std::string log = slurp(path("log"));
+  EXPECT_NE(log.find(".exr: cannot open: Too many open files"), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(path("o.exr")));
 }
 
