@@ -477,12 +477,16 @@ int run(const Options& o) {
 
   // Several inputs are row bands of one image: each band's data window
   // spans the full width and the bands tile the display window's rows.
-  // Their headers: each file is closed once read (opened again to be read),
-  // so that any number of bands fits the descriptor limit.
+  // Their headers. Many bands: each file is closed once its header is read
+  // (opened again to be read), so that any number fits the descriptor
+  // limit. A few stay open until the reading is done: a decoder freed
+  // before the reading raises glibc's dynamic mmap threshold, and the
+  // reading's buffers then stay on the heap (a higher peak).
+  constexpr std::size_t kKeptOpen = 64;
   std::vector<std::unique_ptr<ImageReader>> readers;
   for (const std::string& in : o.inputs) {
     readers.push_back(std::make_unique<ImageReader>(in));
-    readers.back()->release();
+    if (o.inputs.size() > kKeptOpen) readers.back()->release();
   }
   std::sort(readers.begin(), readers.end(),
             [](const auto& a, const auto& b) { return a->data_y() < b->data_y(); });

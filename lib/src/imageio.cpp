@@ -242,8 +242,14 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
   if (T > 1) off.emplace();
   std::vector<long> start(1, 0);  // each file's first row in the image
   std::size_t values = 0;         // largest strip
-  for (const std::string& p : paths) {  // one file open at a time
-    ImageReader r(p);
+  // Every file's header, one file open at a time; those the first band
+  // reads stay open for worker 0 (a decoder freed before the reading raises
+  // glibc's dynamic mmap threshold, and the reading's buffers then stay on
+  // the heap: a higher peak).
+  std::vector<std::unique_ptr<ImageReader>> first_readers(paths.size());
+  for (std::size_t f = 0; f < paths.size(); ++f) {
+    auto opened = std::make_unique<ImageReader>(paths[f]);
+    const ImageReader& r = *opened;
     if (T > 1 && r.format_name() != "openexr")
       throw std::logic_error(r.path() +
                              ": read_bands() with several workers on a file not OpenEXR");
@@ -251,6 +257,7 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
       throw std::logic_error(r.path() + ": read_bands() with half on samples not stored as half");
     start.push_back(start.back() + r.height());
     values = std::max(values, std::size_t(std::min(strip, r.height())) * r.width() * r.channels());
+    if (bands.count() > 0 && start[f] < bands.end(0)) first_readers[f] = std::move(opened);
   }
   if (start.back() != bands.rows())
     throw std::logic_error("read_bands(): the files hold " + std::to_string(start.back()) +
@@ -270,6 +277,7 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
     // closed once its bands (taken in increasing order) have passed them:
     // a worker holds the files of one band open, whatever their count.
     std::vector<std::unique_ptr<ImageReader>> readers(paths.size());
+    if (t == 0) readers = std::move(first_readers);
     auto reader = [&](std::size_t f) -> ImageReader& {
       for (std::size_t e = 0; e < f; ++e) readers[e].reset();
       if (!readers[f]) readers[f] = std::make_unique<ImageReader>(paths[f]);
