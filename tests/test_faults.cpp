@@ -215,7 +215,10 @@ TEST_F(Faults, FullDiskIsAnOutputErrorAndTheOldFileStays) {
     const Result r = run(path("noise.exr") + " -o " + out + " --factor 1 --generator tent -q");
     EXPECT_EQ(r.status, 4) << ext << ": " << r.output;
     EXPECT_NE(r.output.find(out), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("No space left on device"), std::string::npos) << r.output;
+    // TIFF is written by name (imageio.cpp): libtiff reports its own failure
+    EXPECT_TRUE(r.output.find("No space left on device") != std::string::npos ||
+                (ext == "tif" && r.output.find("Write error") != std::string::npos))
+        << r.output;
     EXPECT_EQ(slurp(out), "the old file") << ext;
     fs::remove(out);
     EXPECT_TRUE(fs::is_empty(disk)) << ext;
@@ -288,35 +291,46 @@ TEST_F(Faults, SignalsDuringTheWriteLeaveNoFile) {
   // the file that had the output's name is as it was.
   write_exr(path("big.exr"), random_image(1600, 1600, 3, 9), false);
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
-    put(path("o.exr"), "the old file");
-    const pid_t pid = fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {
-      const std::string in = path("big.exr"), out = path("o.exr");
-      execl(SIPROJECT, SIPROJECT, in.c_str(), "-o", out.c_str(), "--factor", "1", "-d", "float",
-            "-q", static_cast<char*>(nullptr));
-      _exit(127);
-    }
-    bool seen = false;
-    const auto start = std::chrono::steady_clock::now();
-    while (!seen && std::chrono::steady_clock::now() - start < std::chrono::seconds(120)) {
-      if (!staged(dir_).empty()) {
-        ::kill(pid, SIGSTOP);
-        seen = true;
-        break;
+    // A stop that lands after the rename (the file seen, then renamed before
+    // SIGSTOP arrives, on a busy machine) is a lost race, not a finding: the
+    // run is let go and tried again.
+    bool caught = false;
+    for (int attempt = 0; attempt < 5 && !caught; ++attempt) {
+      put(path("o.exr"), "the old file");
+      const pid_t pid = fork();
+      ASSERT_GE(pid, 0);
+      if (pid == 0) {
+        const std::string in = path("big.exr"), out = path("o.exr");
+        execl(SIPROJECT, SIPROJECT, in.c_str(), "-o", out.c_str(), "--factor", "1", "-d", "float",
+              "-q", static_cast<char*>(nullptr));
+        _exit(127);
       }
-      int st;
-      if (waitpid(pid, &st, WNOHANG) == pid) break;
-      std::this_thread::sleep_for(std::chrono::microseconds(200));
+      bool ended = false;
+      int st = 0;
+      const auto start = std::chrono::steady_clock::now();
+      while (std::chrono::steady_clock::now() - start < std::chrono::seconds(120)) {
+        if (!staged(dir_).empty()) {
+          ::kill(pid, SIGSTOP);
+          break;
+        }
+        if (waitpid(pid, &st, WNOHANG) == pid) {
+          ended = true;
+          break;
+        }
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
+      }
+      if (ended) continue;  // finished before its staged file was seen
+      // stopped: is the staged file still there (and so the output not yet renamed)?
+      caught = !staged(dir_).empty();
+      if (caught) ::kill(pid, sig);
+      ::kill(pid, SIGCONT);
+      ASSERT_EQ(waitpid(pid, &st, 0), pid);
+      if (!caught) continue;
+      EXPECT_TRUE(WIFSIGNALED(st) && WTERMSIG(st) == sig) << "signal " << sig << ", status " << st;
+      EXPECT_TRUE(staged(dir_).empty()) << "signal " << sig;
+      EXPECT_EQ(slurp(path("o.exr")), "the old file") << "signal " << sig;
     }
-    ASSERT_TRUE(seen) << "signal " << sig << ": no staged file appeared";
-    ::kill(pid, sig);
-    ::kill(pid, SIGCONT);
-    int st = 0;
-    ASSERT_EQ(waitpid(pid, &st, 0), pid);
-    EXPECT_TRUE(WIFSIGNALED(st) && WTERMSIG(st) == sig) << "signal " << sig << ", status " << st;
-    EXPECT_TRUE(staged(dir_).empty()) << "signal " << sig;
-    EXPECT_EQ(slurp(path("o.exr")), "the old file") << "signal " << sig;
+    EXPECT_TRUE(caught) << "signal " << sig << ": the write was never caught in 5 runs";
   }
 }
 
@@ -530,4 +544,106 @@ TEST_F(Faults, RequestsTooLargeForMemoryAreRefused) {
   EXPECT_NE(r.output.find("of memory"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("--size"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("o.exr")));
+}
+
+TEST_F(Faults, EncodedInputsAndDisplayOutputs) {
+  // Integer inputs tagged sRGB are decoded to linear light before the
+  // projection and 8-bit outputs encoded again: a flat 128 stays 128 in
+  // every 8-bit format (WebP and GIF included), and a float output holds
+  // the linear value.
+  Image flat(64, 64, 3);
+  std::fill(flat.data.begin(), flat.data.end(), 0.5f);
+  OIIO::ImageSpec spec(64, 64, 3, OIIO::TypeDesc::UINT8);
+  {
+    std::vector<unsigned char> v(64 * 64 * 3, 128);
+    auto out = OIIO::ImageOutput::create(path("c128.png"));
+    ASSERT_TRUE(out && out->open(path("c128.png"), spec) &&
+                out->write_image(OIIO::TypeDesc::UINT8, v.data()) && out->close());
+  }
+  ASSERT_TRUE(ImageReader(path("c128.png")).srgb_encoded());
+  for (const std::string ext : {"png", "tif", "jpg", "webp", "gif"}) {
+    if (!OIIO::ImageOutput::create("x." + ext)) continue;  // a writer this build lacks
+    const Result r = run(path("c128.png") + " -o " + path("o." + ext) + " --factor 4 -q");
+    ASSERT_EQ(r.status, 0) << ext << ": " << r.output;
+    auto in = OIIO::ImageInput::open(path("o." + ext));
+    ASSERT_TRUE(in) << ext;
+    std::vector<unsigned char> v(16 * 16 * in->spec().nchannels);
+    ASSERT_TRUE(in->read_image(0, 0, 0, in->spec().nchannels, OIIO::TypeDesc::UINT8, v.data()));
+    for (int q = 0; q < 16 * 16; ++q)
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(int(v[q * in->spec().nchannels + c]), 128) << ext;
+  }
+  ASSERT_EQ(run(path("c128.png") + " -o " + path("o.exr") + " --factor 4 -q").status, 0);
+  for (float v : pixels(path("o.exr"))) ASSERT_NEAR(v, srgb_to_linear(128.0f / 255), 1e-6f);
+  const Result ico = run(path("c128.png") + " -o " + path("o.ico") + " --factor 4");
+  EXPECT_EQ(ico.status, 4) << ico.output;
+  EXPECT_NE(ico.output.find("ICO output is not supported"), std::string::npos) << ico.output;
+  EXPECT_FALSE(fs::exists(path("o.ico")));
+}
+
+TEST_F(Faults, FilesThatAreNotRegularAndNamesToKeep) {
+  // A FIFO or a device as input or output is refused at once (it hung, or
+  // was replaced); an existing folder as output with --coeffs loses the
+  // coefficient file's old content no more than the folder; a replaced
+  // file keeps its permissions; a name as long as the folder allows works.
+  write_exr(path("in.exr"), random_image(32, 32, 3, 2), false);
+  ASSERT_EQ(mkfifo(path("fifo.exr").c_str(), 0644), 0);
+  const std::pair<std::string, std::string> cases[] = {
+      {path("fifo.exr") + " -o " + path("o.exr"), "fifo.exr: not a regular file"},
+      {"/dev/zero -o " + path("o.exr"), "/dev/zero: not a regular file"},
+      {path("in.exr") + " -o " + path("fifo.exr"), "fifo.exr: not a regular file"},
+      {path("in.exr") + " -o /dev/null", "/dev/null: not a regular file"},
+  };
+  for (const auto& [args, message] : cases) {
+    const Result r = shell("timeout 30 " + std::string(SIPROJECT) + " " + args + " --factor 2");
+    EXPECT_TRUE(r.status == 3 || r.status == 4) << args << ": " << r.output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << args << ": " << r.output;
+  }
+  EXPECT_TRUE(fs::is_fifo(path("fifo.exr")));
+  fs::create_directory(path("folder.exr"));
+  put(path("c.exr"), "old coefficients");
+  const Result d = run(path("in.exr") + " -o " + path("folder.exr") + " --coeffs " + path("c.exr") +
+                       " --factor 2");
+  EXPECT_EQ(d.status, 4) << d.output;
+  EXPECT_NE(d.output.find("folder.exr: is a folder"), std::string::npos) << d.output;
+  EXPECT_EQ(slurp(path("c.exr")), "old coefficients");
+  put(path("private.exr"), "x");
+  fs::permissions(path("private.exr"), fs::perms::owner_read | fs::perms::owner_write);
+  ASSERT_EQ(run(path("in.exr") + " -o " + path("private.exr") + " --factor 2 -q").status, 0);
+  EXPECT_EQ(fs::status(path("private.exr")).permissions() & fs::perms::all,
+            fs::perms::owner_read | fs::perms::owner_write);
+  const std::string longest = path(std::string(251, 'a') + ".exr");
+  const Result l = run(path("in.exr") + " -o " + longest + " --factor 2 -q");
+  EXPECT_EQ(l.status, 0) << l.output;
+  EXPECT_TRUE(fs::exists(longest));
+  EXPECT_TRUE(staged(dir_).empty());
+}
+
+TEST_F(Faults, CoefficientFileMetadataIsChecked) {
+  // A coefficient file whose metadata was edited to something the code
+  // cannot evaluate as written is an input error naming the file and the
+  // key (it was read as a default, or failed deep inside with status 1).
+  write_exr(path("in.exr"), random_image(64, 48, 3, 2), false);
+  ASSERT_EQ(run(path("in.exr") + " -o " + path("o.exr") + " --factor 4 --coeffs " + path("c.exr") +
+                " -q --highlight-compress").status, 0);
+  const std::pair<std::string, std::string> edits[] = {
+      {"sis:highlight_compress yes", "sis:highlight_compress"},
+      {"sis:lattice foo", "sis:lattice"},
+      {"sis:storage foo", "sis:storage"},
+      {"sis:degree 99", "sis:degree"},
+      {"sis:method foo", "sis:method"},
+      {"sis:lattice_matrix '1e30 0 0 1e30'", "coefficient file metadata"},
+      {"sis:lattice_matrix '0 1 1 0'", "sis:lattice"},
+      {"sis:lattice_matrix '-1 0 0 1'", "sis:lattice"},
+      {"sis:lattice_origin '1e30 0'", "sis:lattice_origin"},
+      {"sis:image_width nan", "sis:image_width"},
+  };
+  for (const auto& [edit, key] : edits) {
+    const Result e = shell("oiiotool " + path("c.exr") + " --attrib " + edit + " -o " + path("e.exr"));
+    ASSERT_EQ(e.status, 0) << edit << ": " << e.output;
+    const Result r = run(path("e.exr") + " -o " + path("x.exr"));
+    EXPECT_EQ(r.status, 3) << edit << ": " << r.output;
+    EXPECT_NE(r.output.find("e.exr: "), std::string::npos) << edit << ": " << r.output;
+    EXPECT_NE(r.output.find(key), std::string::npos) << edit << ": " << r.output;
+    EXPECT_FALSE(fs::exists(path("x.exr"))) << edit;
+  }
 }

@@ -33,6 +33,8 @@ using namespace sis;
 
 namespace {
 
+double srgb_decode(double v) { return srgb_to_linear(float(v)); }
+
 using sis::cli::kExitUsage;
 using sis::cli::kExitInput;
 using sis::cli::kExitOutput;
@@ -86,13 +88,28 @@ void check_memory(std::uint64_t needed, const std::string& what, bool verbose) {
 // the final image (float); while writing, the image, its converted copy
 // and the coefficient file's float grid beside the coefficients; plus the
 // readers' strips and decoders per thread and the program itself.
+// Bytes of the per-axis weight tables (an index and a weight per entry) of
+// an acquisition from `samples` to `coefficients` along each axis, a kernel
+// of radius R, and of the resampling to the output: an upsampled axis's
+// entries also span the input model's reach (acquisition.cpp).
+double table_bytes(long coefficients_x, long samples_x, long coefficients_y, long samples_y,
+                   double R) {
+  auto axis = [&](long n, long samples) {
+    const double ratio = double(samples) / double(std::max(1L, n));
+    const double entries = 2 * R * std::max(1.0, ratio) + 2 + (ratio < 1 ? 2 * 36 + 4 : 0);
+    return double(n) * (entries + 2 * R + 2) * 16;
+  };
+  return axis(coefficients_x, samples_x) + axis(coefficients_y, samples_y);
+}
+
 std::uint64_t projection_bytes(long W, long H, int C, std::uint64_t coefficients, bool local,
-                               bool coeffs_file, int threads) {
+                               bool coeffs_file, int threads, double tables = 0) {
   // in double: the product of absurd sides passes 2^64
   const double values = double(W) * double(H) * C, grid = double(coefficients) * C;
   const double acquire = 8 * grid + (local ? 8 * values : 0) + 4 * values;
   const double write = 8 * values + (coeffs_file ? 12 * grid : 0);
-  const double bytes = std::max(acquire, write) + threads * double(16 << 20) + double(64 << 20);
+  const double bytes =
+      std::max(acquire, write) + tables + threads * double(16 << 20) + double(64 << 20);
   return bytes < 1.8e19 ? std::uint64_t(bytes) : UINT64_MAX;
 }
 
@@ -296,6 +313,7 @@ void add_nonfinite(NonFinite& n, const Counts& count, const Counts& first, long 
 // `readers`: the inputs in row order (their paths and formats).
 NonFinite acquire_bands(const std::vector<std::unique_ptr<ImageReader>>& readers, bool half,
                         int threads, bool stop,
+                        const std::function<void(float*, std::size_t, std::size_t)>& decode,
                         const std::function<void(float*, std::size_t, std::size_t)>& compress,
                         Acquisition& acquisition, LocalRange& local, const BandPartition& bands,
                         const std::function<void(double)>& progress) {
@@ -351,6 +369,7 @@ NonFinite acquire_bands(const std::vector<std::unique_ptr<ImageReader>>& readers
         while (first_bad < seen && !k.bad_first[r].compare_exchange_weak(seen, first_bad)) {
         }
       }
+      if (decode) decode(v, std::size_t(k1 - k0), std::size_t(k0));
       k.range->fold(gy, k0, k1, v);
       if (compress) compress(v, std::size_t(k1 - k0), std::size_t(k0));
       return static_cast<const float*>(v);
@@ -380,6 +399,7 @@ int run(const Options& o) {
   const auto t_start = Clock::now();
   const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
   if (o.verbose && o.quiet) throw UsageError("-v and -q exclude each other");
+  if (o.threads < 0) throw UsageError("--threads " + std::to_string(o.threads) + ": expected 0 (all cores) or more");
   if (o.threads > kMaxThreads)
     throw UsageError("--threads " + std::to_string(o.threads) + ": at most " +
                      std::to_string(kMaxThreads));
@@ -466,11 +486,7 @@ int run(const Options& o) {
     throw UsageError("--coeffs " + o.coeffs + " is the output file");
   for (const std::string& path : {o.output, o.coeffs}) {
     if (path.empty()) continue;
-    const fs::path p(path);
-    const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
-    std::error_code ec;
-    if (!fs::is_directory(dir, ec))
-      throw OutputError(path + ": output folder " + dir.string() + " does not exist");
+    check_output(path);
     if (!o.coeffs.empty() && path == o.coeffs && is_8bit_format(path))
       throw UsageError("--coeffs " + path + ": coefficient files are float EXR");
   }
@@ -559,6 +575,11 @@ int run(const Options& o) {
   std::unique_ptr<LocalRange> local;
   const int alpha = reader.alpha_channel();
   // f on the colour values of data, values [k0, k0 + n) of interleaved rows
+  // Integer samples tagged sRGB (PNG, JPEG, 8- and 16-bit TIFF) are decoded
+  // to linear light first: the method filters radiance, and an 8-bit output
+  // encodes again (a flat 128 stays 128).
+  const bool srgb = std::all_of(readers.begin(), readers.end(),
+                                [](const auto& r) { return r->srgb_encoded(); });
   auto for_colour = [&](float* data, std::size_t n, double (*f)(double), std::size_t k0 = 0) {
     for (std::size_t q = 0; q < n; ++q)
       if (int((k0 + q) % C) != alpha) data[q] = static_cast<float>(f(data[q]));
@@ -603,7 +624,8 @@ int run(const Options& o) {
     else
       std::tie(W, H) = out_size(k.c.width, k.c.height);
     check_memory(projection_bytes(W, H, C, std::uint64_t(k.c.width) * std::uint64_t(k.c.height),
-                                  false, false, threads),
+                                  false, false, threads,
+                                  table_bytes(W, k.c.width, H, k.c.height, k.generator.radius())),
                  "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
                      std::to_string(C) + " output",
                  o.verbose);
@@ -638,7 +660,8 @@ int run(const Options& o) {
           hex_layout(o.density, double(W), double(H), hex_default_margin(hex_order));
       coefficients = std::uint64_t(layout.columns) * std::uint64_t(layout.rows);
     }
-    check_memory(projection_bytes(W, H, C, coefficients, true, !o.coeffs.empty(), threads),
+    check_memory(projection_bytes(W, H, C, coefficients, true, !o.coeffs.empty(), threads,
+                                  table_bytes(W, win, H, hin, generator.radius())),
                  "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
                      std::to_string(C) + " output",
                  o.verbose);
@@ -658,8 +681,13 @@ int run(const Options& o) {
         compress = [&](float* v, std::size_t n, std::size_t k0) {
           for_colour(v, n, highlight_compress, k0);
         };
+      std::function<void(float*, std::size_t, std::size_t)> decode;
+      if (srgb)
+        decode = [&](float* v, std::size_t n, std::size_t k0) {
+          for_colour(v, n, srgb_decode, k0);
+        };
       Progress progress(!o.quiet, "reading and acquiring");
-      bad = acquire_bands(readers, half, threads, o.nonfinite == "error", compress, *cartesian,
+      bad = acquire_bands(readers, half, threads, o.nonfinite == "error", decode, compress, *cartesian,
                           *local, plan->bands(), [&](double f) { progress.update(f); });
       t_acquire = seconds_since(t);
     } else {
@@ -738,6 +766,7 @@ int run(const Options& o) {
           parallel_for(values, threads, [&](long k0, long k1) {
             for (long r = 0; r < rows; ++r) {
               float* v = data + r * row_size + k0;
+              if (srgb) for_colour(v, std::size_t(k1 - k0), srgb_decode, std::size_t(k0));
               local->fold(y + r, k0, k1, v);
               if (compressed) for_colour(v, std::size_t(k1 - k0), highlight_compress, std::size_t(k0));
             }
@@ -828,6 +857,7 @@ int run(const Options& o) {
       {"sis:display", shown.name()},
       {"sis:boundary", boundary_name(k.boundary)},
       {"sis:input", input_label},
+      {"sis:input_transfer", srgb ? "srgb" : "linear"},
       {"sis:highlight_compress", compressed ? "1" : "0"},
       {"sis:clamp", clamp_name(clamp)},
       {"sis:output_min", std::to_string(after.min)},
@@ -947,7 +977,7 @@ int main(int argc, char** argv) {
                  "samples under each output pixel)")->capture_default_str();
   app.add_option("--prefilter", o.prefilter, "fft or recursive (same result to rounding)")->capture_default_str();
   app.add_option("--threads", o.threads, "worker threads (0: all cores); output is bit-identical for any N")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->capture_default_str();
   app.add_flag("-v,--verbose", o.verbose, "print sizes and the time of each stage");
   app.add_flag("-q,--quiet", o.quiet, "print nothing but errors");
   if (const auto code = sis::cli::parse(app, argc, argv)) return *code;

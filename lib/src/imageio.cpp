@@ -4,11 +4,13 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cctype>
 #include <climits>
@@ -53,6 +55,9 @@ ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path)
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path + ": no such file");
   if (fs::is_directory(path, ec)) throw InputError(path + ": is a folder, not an image");
+  if (!fs::is_regular_file(path, ec))
+    throw InputError(path + ": not a regular file (a FIFO, a device or a socket); images are "
+                     "read from files");
   // The system's reason first (no permission, too many open files...):
   // OpenImageIO reports any file it cannot open as one it cannot parse.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -96,6 +101,14 @@ long ImageReader::full_y() const { return impl_->spec.full_y; }
 long ImageReader::full_width() const { return impl_->spec.full_width; }
 long ImageReader::full_height() const { return impl_->spec.full_height; }
 int ImageReader::alpha_channel() const { return impl_->spec.alpha_channel; }
+bool ImageReader::srgb_encoded() const {
+  const ImageSpec& s = impl_->spec;
+  auto integer = [](TypeDesc t) { return t.basetype != TypeDesc::HALF && t.basetype != TypeDesc::FLOAT && t.basetype != TypeDesc::DOUBLE; };
+  const bool ints = s.channelformats.empty()
+                        ? integer(s.format)
+                        : std::all_of(s.channelformats.begin(), s.channelformats.end(), integer);
+  return ints && OIIO::Strutil::iequals(s.get_string_attribute("oiio:ColorSpace"), "sRGB");
+}
 std::string ImageReader::format_name() const { return impl_->format; }
 std::vector<std::string> ImageReader::channel_names() const { return impl_->spec.channelnames; }
 std::string ImageReader::attribute(const std::string& name) const {
@@ -403,19 +416,54 @@ Image read_image(const std::string& path) {
   return img;
 }
 
-bool is_8bit_format(const std::string& path) {
+namespace {
+std::string lower_extension(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff" ||
-         ext == ".bmp" || ext == ".tga" || ext == ".ppm" || ext == ".pnm";
+  return ext;
+}
+}  // namespace
+
+bool is_8bit_format(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  for (const char* linear : {".exr", ".sxr", ".mxr", ".hdr", ".rgbe", ".pfm", ".fits", ".fit", ".fts"})
+    if (ext == linear) return false;
+  return true;
+}
+
+void check_output(const std::string& path) {
+  const fs::path p(path);
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw OutputError(path + ": output folder " + dir.string() + " does not exist");
+  const fs::file_status st = fs::symlink_status(p, ec);
+  if (fs::is_directory(st)) throw OutputError(path + ": is a folder");
+  if (fs::exists(st) && !fs::is_regular_file(st) && !fs::is_symlink(st))
+    throw OutputError(path + ": not a regular file (a FIFO, a device or a socket); siproject "
+                      "writes a finished file and renames it onto the name");
+  if (lower_extension(path) == ".ico")
+    throw OutputError(path + ": ICO output is not supported (OpenImageIO 2.4 writes ICO files "
+                      "it cannot read back)");
+  if (!ImageOutput::create(path))
+    throw OutputError(path + ": no writer for this name's format (" + OIIO::geterror() + ")");
+}
+
+float srgb_to_linear(float v) {
+  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+}
+
+float linear_to_srgb(float v) {
+  if (!(v > 0)) return 0.0f;
+  if (v >= 1) return 1.0f;
+  return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
 }
 
 namespace {
 
-float srgb_encode(float v) {
-  if (!(v > 0)) return 0.0f;
-  if (v >= 1) return 1.0f;
-  return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+std::string out_format_name(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  return ext.empty() ? std::string("format's") : ext.substr(1);
 }
 
 // Writes an OpenImageIO output through a staged file's descriptor. Every
@@ -473,17 +521,48 @@ class CheckedFile : public OIIO::Filesystem::IOProxy {
 // caller): never a partial file at `path`, and no temporary file left.
 StagedFile stage(const std::string& path, const ImageSpec& spec, TypeDesc data_type,
                  const void* data) {
+  check_output(path);
   auto out = ImageOutput::create(path);
   if (!out) throw OutputError(path + ": cannot write this format: " + OIIO::geterror());
   StagedFile file(path);
+  // Writers that take a proxy write through the checked descriptor; the few
+  // that do not (HEIF, SGI, FITS...), and TIFF (OpenImageIO 2.4's TIFF writer
+  // makes a file without its image length through any proxy once string
+  // attributes are set), write the staged file by its name, which must still
+  // be the file created for them.
+  const std::string ext = lower_extension(path);
+  const bool through_proxy = out->supports("ioproxy") && ext != ".tif" && ext != ".tiff";
   CheckedFile proxy(file.temporary(), file.fd());
-  const bool ok = out->set_ioproxy(&proxy) && out->open(file.temporary(), spec) &&
-                  out->write_image(data_type, data) && out->close();
+  const bool ok = (!through_proxy || out->set_ioproxy(&proxy)) &&
+                  out->open(file.temporary(), spec) && out->write_image(data_type, data) &&
+                  out->close();
   const std::string why = out->geterror();
   out.reset();
   if (proxy.failure()) throw OutputError(path + ": cannot write: " + std::strerror(proxy.failure()));
   if (!ok) throw OutputError(path + ": " + (why.empty() ? "write failed" : why));
+  if (!through_proxy) {
+    struct stat a, b;
+    if (::fstat(file.fd(), &a) != 0 || ::lstat(file.temporary().c_str(), &b) != 0 ||
+        a.st_dev != b.st_dev || a.st_ino != b.st_ino)
+      throw OutputError(path + ": the staged file " + file.temporary() + " was replaced while written");
+  }
   file.close();
+  // What was written reads back as what was meant: its header (every
+  // format), and its pixels where the writer's own writes went unchecked.
+  auto back = ImageInput::open(file.temporary());
+  // (a format may add channels: GIF reads back as RGBA)
+  bool readable = back && back->spec().width == spec.width && back->spec().height == spec.height &&
+                  back->spec().nchannels >= spec.nchannels;
+  if (readable && !through_proxy) {
+    std::vector<float> all(std::size_t(spec.width) * spec.height * back->spec().nchannels);
+    readable = back->read_image(0, 0, 0, back->spec().nchannels, TypeDesc::FLOAT, all.data());
+  }
+  std::string back_why = back ? back->geterror() : OIIO::geterror();
+  if (back) back->close();
+  if (!readable)
+    throw OutputError(path + ": the " + out_format_name(path) + " writer made a file that does "
+                      "not read back" + (back_why.empty() ? "" : " (" + back_why + ")") +
+                      "; nothing written");
   return file;
 }
 
@@ -527,7 +606,7 @@ StagedFile stage_image(const std::string& path, const Image& image,
       if (c == a)
         enc[p * C + c] = alpha;
       else
-        enc[p * C + c] = srgb_encode(a >= 0 ? (alpha > 0 ? in[c] / alpha : 0.0f) : in[c]);
+        enc[p * C + c] = linear_to_srgb(a >= 0 ? (alpha > 0 ? in[c] / alpha : 0.0f) : in[c]);
     }
   }
   return stage(path, spec, TypeDesc::FLOAT, enc.data());
@@ -597,16 +676,37 @@ Coefficients read_coefficients(ImageReader& r) {
     const auto o = numbers("sis:lattice_origin", 2);
     const auto L = numbers("sis:lattice_matrix", 4);
     k.lattice = Lattice({o[0], o[1]}, {L[0], L[1], L[2], L[3]});
-    if (k.lattice.is_hexagonal() || r.attribute("sis:lattice") == "hexagonal") {
-      if (!k.lattice.is_hexagonal() || r.attribute("sis:storage") != "offset-rows")
-        throw std::invalid_argument("a hexagonal lattice needs a hexagonal matrix and "
-                                    "sis:storage offset-rows");
+    const std::string lattice = r.attribute("sis:lattice"), storage = r.attribute("sis:storage");
+    if (lattice == "hexagonal") {
+      if (!k.lattice.is_hexagonal() || storage != "offset-rows")
+        throw std::invalid_argument("sis:lattice hexagonal needs a hexagonal sis:lattice_matrix "
+                                    "and sis:storage offset-rows");
       k.generator = hex_generator_kernel(BoxSpline::parse(r.attribute("sis:generator")).order());
-    } else {
+    } else if (lattice == "cartesian") {
+      if (!k.lattice.separable() || !(L[0] > 0) || !(L[3] > 0) || storage != "rows")
+        throw std::invalid_argument("sis:lattice cartesian needs a diagonal sis:lattice_matrix of "
+                                    "positive steps and sis:storage rows");
       k.generator = Kernel::parse(r.attribute("sis:generator"));
+    } else {
+      throw std::invalid_argument("sis:lattice '" + lattice + "': expected cartesian or hexagonal");
     }
+    const std::string degree = r.attribute("sis:degree");
+    if (degree != std::to_string(k.generator.degree()))
+      throw std::invalid_argument("sis:degree '" + degree + "' is not the degree of generator " +
+                                  r.attribute("sis:generator"));
     k.boundary = parse_boundary(r.attribute("sis:boundary"));
-    k.min_error = r.attribute("sis:method") != "conventional";
+    const std::string method = r.attribute("sis:method");
+    if (method != "min-error" && method != "conventional")
+      throw std::invalid_argument("sis:method '" + method + "': expected min-error or conventional");
+    k.min_error = method == "min-error";
+    for (const char* flag : {"sis:highlight_compress"}) {
+      const std::string v = r.attribute(flag);
+      if (!v.empty() && v != "0" && v != "1")
+        throw std::invalid_argument(std::string(flag) + " '" + v + "': expected 0 or 1");
+    }
+    const std::string input_format = r.attribute("sis:input_format");
+    if (!input_format.empty() && input_format != "half" && input_format != "float")
+      throw std::invalid_argument("sis:input_format '" + input_format + "': expected half or float");
     k.image_width = numbers("sis:image_width", 1)[0];
     k.image_height = numbers("sis:image_height", 1)[0];
     if (!(k.image_width >= 1 && k.image_height >= 1 && k.image_width <= kMaxFrame &&
@@ -617,6 +717,9 @@ Coefficients read_coefficients(ImageReader& r) {
     if (!std::isfinite(o[0]) || !std::isfinite(o[1]) || !std::isfinite(det) || !(det != 0))
       throw std::invalid_argument("sis:lattice_origin and sis:lattice_matrix must be finite, the "
                                   "matrix invertible");
+    // the lattice covers the frame: its origin lies within a frame of it
+    if (std::abs(o[0]) > 2 * k.image_width + 1 || std::abs(o[1]) > 2 * k.image_height + 1)
+      throw std::invalid_argument("sis:lattice_origin places the lattice away from the frame");
   } catch (const std::invalid_argument& e) {
     throw InputError(r.path() + ": coefficient file metadata: " + e.what());
   }
@@ -633,7 +736,12 @@ Coefficients read_coefficients(ImageReader& r) {
     }
   }
   if (k.lattice.separable()) {
-    const auto e = k.lattice.extent(k.image_width, k.image_height);
+    std::array<long, 2> e{0, 0};
+    try {
+      e = k.lattice.extent(k.image_width, k.image_height);
+    } catch (const std::invalid_argument& ex) {
+      throw InputError(r.path() + ": coefficient file metadata: " + ex.what());
+    }
     if (e[0] != k.c.width || e[1] != k.c.height)
       throw InputError(r.path() + ": coefficient grid size does not match its lattice and frame");
   }

@@ -74,9 +74,13 @@ StagedFile::StagedFile(const std::string& target) : target_(target) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw OutputError(target + ": folder " + dir.string() + " does not exist");
   if (fs::is_directory(t, ec)) throw OutputError(target + ": is a folder");
-  // .NAME.sis-XXXXXX.EXT: hidden, and with the target's extension.
+  // .NAME.sis-XXXXXX.EXT: hidden, and with the target's extension; without
+  // NAME where that would pass the longest name the folder takes.
   const std::string ext = t.extension().string();
-  std::string name = (dir / ("." + t.stem().string() + ".sis-XXXXXX" + ext)).string();
+  std::string leaf = "." + t.stem().string() + ".sis-XXXXXX" + ext;
+  const long name_max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
+  if (long(leaf.size()) > (name_max > 0 ? name_max : 255)) leaf = ".sis-XXXXXX" + ext;
+  std::string name = (dir / leaf).string();
   if (name.size() > PATH_MAX) throw OutputError(target + ": file name too long");
   SignalsHeld held;
   std::lock_guard<std::mutex> lock(registry_mutex);
@@ -88,17 +92,30 @@ StagedFile::StagedFile(const std::string& target) : target_(target) {
   if (slot_ < 0) throw OutputError(target + ": too many output files at once");
   Slot& s = registry[slot_];
   std::memcpy(s.path, name.c_str(), name.size() + 1);
+  // Registered before it exists: a signal handled on another thread (the
+  // mask above holds this thread's only) as mkostemps names and creates it
+  // removes it.
+  s.active.store(1);
   fd_ = ::mkostemps(s.path, int(ext.size()), O_CLOEXEC);
   if (fd_ < 0) {
     const int e = errno;
+    s.active.store(0);
     slot_ = -1;
     throw OutputError(target + ": cannot create a file in folder " + dir.string() + ": " +
                       std::strerror(e));
   }
-  s.active.store(1);
   temporary_ = s.path;
-  // mkostemps creates 0600; an output gets the permissions of a new file
-  ::fchmod(fd_, 0666 & ~kUmask);
+  // mkostemps creates 0600. A file that replaces another keeps its
+  // permissions (and its owner and group where the user may give them), as
+  // a file rewritten in place would; a new one gets a new file's.
+  struct stat old;
+  if (::stat(target.c_str(), &old) == 0 && S_ISREG(old.st_mode)) {
+    ::fchmod(fd_, old.st_mode & 07777);
+    if (::fchown(fd_, old.st_uid, old.st_gid) != 0) {  // not permitted: the user's own
+    }
+  } else {
+    ::fchmod(fd_, 0666 & ~kUmask);
+  }
 }
 
 StagedFile::StagedFile(StagedFile&& o) noexcept

@@ -66,6 +66,9 @@ class ImageReader {
   long full_height() const;
   std::vector<std::string> channel_names() const;
   int alpha_channel() const;  // -1 if none
+  // True when the samples are integers tagged sRGB-encoded (oiio:ColorSpace;
+  // PNG, JPEG, 8- and 16-bit TIFF): their colour is display-referred.
+  bool srgb_encoded() const;
   std::string format_name() const;
   // A string attribute of the file's metadata ("" when absent).
   std::string attribute(const std::string& name) const;
@@ -154,8 +157,21 @@ StagedFile stage_image(const std::string& path, const Image& image,
                        const Metadata& metadata = {}, int alpha_channel = -1,
                        SampleFormat format = SampleFormat::Float);
 
-// True for the formats written 8-bit sRGB by write_image.
+// True for the formats written 8-bit sRGB by write_image: all but the
+// linear float formats (EXR, Radiance HDR, PFM, FITS).
 bool is_8bit_format(const std::string& path);
+
+// Refuses, before any work, an output write_image could not make: no
+// writer for its name (or ICO, whose writer in OpenImageIO 2.4 makes files
+// it cannot read back), its folder missing, the name an existing folder or
+// a file that is not a regular file or a link (a FIFO, a device: a finished
+// file renamed onto it would replace it). Throws OutputError naming it.
+void check_output(const std::string& path);
+
+// The sRGB transfer functions (IEC 61966-2-1), on [0, 1] (outside, the
+// encoder clamps; the decoder extends the curve's ends as they are).
+float srgb_to_linear(float v);
+float linear_to_srgb(float v);
 
 // Coefficient files: a float EXR of the coefficient grid whose metadata
 // records lattice, generator, degree, boundary, method and frame size.
