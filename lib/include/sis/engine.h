@@ -1,0 +1,165 @@
+#pragma once
+// The projection engine: the whole method from samples to coefficients and
+// from coefficients to a final image, for every front end (siproject, the
+// studies' tools, scripts). A request names the inputs, the output frame,
+// the space (a lattice with a generator), the method, the boundary rule and
+// the remedies; the engine reads the inputs as it needs them (in bands on
+// every core where it can), checks them, projects, prefilters and reports
+// what it saw. Its errors are InputError (a file), RequestError (what was
+// asked cannot be done: sizes, densities, memory) and OutputError.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "sis/acquisition.h"
+#include "sis/hex_acquisition.h"
+#include "sis/imageio.h"
+#include "sis/prefilter.h"
+#include "sis/range.h"
+#include "sis/resample.h"
+
+namespace sis {
+
+// A request the engine cannot carry out as asked. The message names the
+// request's field by siproject's option and the problem.
+struct RequestError : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+
+// One input: a region of the frame's sample grid, from a file (any image
+// OpenImageIO reads) or from samples in memory (read where they are, never
+// copied whole). Today a region is a band of whole rows: a file's rows are
+// placed by its data window within its display window, an image's at `row`.
+struct ProjectionInput {
+  std::string path;
+  const Image* image = nullptr;
+  long row = 0;      // in-memory: the band's first row in the grid
+  long rows = 0;     // in-memory: the grid's height (0: the image's own)
+  std::string name;  // in-memory: how messages name it ("array")
+  std::vector<std::string> channel_names;  // in-memory (default R, G, B, A or c0...)
+
+  static ProjectionInput file(const std::string& path) {
+    ProjectionInput in;
+    in.path = path;
+    return in;
+  }
+  static ProjectionInput memory(const Image& image, std::string name = "array") {
+    ProjectionInput in;
+    in.image = &image;
+    in.name = std::move(name);
+    return in;
+  }
+};
+
+// What the inputs hold, checked as one image (every band of one grid).
+struct InputSet {
+  long width = 0, height = 0;  // the sample grid
+  int channels = 0;
+  std::vector<std::string> channel_names;
+  int alpha = -1;
+  bool half = false;   // every input stores half
+  bool srgb = false;   // integer samples tagged sRGB: decoded to linear light
+  bool coefficient_file = false;
+  std::string label;   // "render.exr and 2 more bands"
+  std::vector<ProjectionInput> bands;  // in row order
+  // The files' readers, in the inputs' order: open until the reading is
+  // done where there are few (a decoder freed before the reading raises
+  // glibc's dynamic mmap threshold: a higher peak), closed at once where
+  // there are many (the descriptor limit).
+  std::vector<std::shared_ptr<ImageReader>> readers;
+};
+// Reads the inputs' headers (each file closed again unless few) and checks
+// that they tile one grid. Throws InputError naming the file.
+InputSet inspect(const std::vector<ProjectionInput>& inputs);
+
+enum class SpaceKind { Cartesian, Hexagonal };
+
+// The space: a lattice with a generator, from a closed set. Cartesian: the
+// tensor space of `generator` on the output pixels. Hexagonal: the
+// box spline of `hex_order` on a hexagonal lattice of `density` points per
+// output pixel, samples taken by `quadrature`.
+struct Space {
+  SpaceKind kind = SpaceKind::Cartesian;
+  Kernel generator = Kernel::bspline(3);
+  int hex_order = 2;
+  double density = 1.0;
+  HexQuadrature quadrature = HexQuadrature::Point;
+};
+
+struct ProjectionRequest {
+  std::vector<ProjectionInput> inputs;
+  long width = 0, height = 0;  // the output frame, in pixels
+  Space space;
+  Method method = Method::MinError;
+  Boundary boundary = Boundary::Mirror;
+  PrefilterMethod prefilter = PrefilterMethod::FFT;
+  bool zero_nonfinite = false;     // NaN/Inf samples: replaced by 0, else an InputError
+  bool highlight_compress = false;
+  int threads = 1;
+  bool coefficient_file = false;   // the caller will also write the coefficients (memory estimate)
+  std::function<void(double)> progress;  // fraction of the input read, from the worker threads
+};
+
+struct NonFiniteReport {
+  long count = 0, x = -1, y = -1;
+  int channel = -1;
+  std::string file;
+  std::string where;  // "FILE: non-finite sample (NaN or Inf) at x X, y Y, channel C"
+};
+
+struct Projection {
+  Coefficients coefficients;  // kept in float precision, as a coefficient file stores them
+  InputSet inputs;
+  std::unique_ptr<LocalRange> local_range;  // of the samples under each output pixel
+  NonFiniteReport nonfinite;                // those replaced by 0
+  bool highlight_compressed = false;
+  double acquire_seconds = 0, prefilter_seconds = 0;
+  std::uint64_t estimated_bytes = 0;
+};
+
+// Projects the inputs onto the space (inspected here, or by the caller
+// first). Throws RequestError before reading when the request cannot fit in
+// memory (available_memory) or the space cannot be built on these samples.
+Projection project(const ProjectionRequest& request);
+Projection project(const ProjectionRequest& request, InputSet inspected);
+
+// A coefficient file, read and checked: non-finite coefficients are an
+// InputError, or replaced by 0 (counted in `replaced`).
+Coefficients load_coefficients(const std::string& path, bool zero_nonfinite,
+                               NonFiniteReport* replaced = nullptr);
+
+struct FinalImage {
+  Image image;
+  RangeReport before, after;  // before and after the clamp
+  bool own_range = false;     // the local range was the image's own (out_of_range is known)
+};
+
+// The final image of W x H pixels: f_app sampled by the display (the
+// conventional methods' own pixels where centred at the lattice's size),
+// highlights expanded (every channel but `alpha`), ranges reported,
+// clamped. A value that passes float's range is an InputError naming
+// `label` and the channel of `names`. `local` may be null.
+FinalImage final_image(const Coefficients& k, const Display& display, long W, long H,
+                       bool highlight_expand, Clamp clamp, const LocalRange* local, int threads,
+                       const std::string& label, const std::vector<std::string>& names,
+                       int alpha = -1);
+
+// The peak bytes a projection to W x H x C needs (coefficients, local range,
+// image, write copies, weight tables, per-thread buffers), and the refusal
+// of what does not fit (RequestError naming --size and --factor).
+std::uint64_t projection_bytes(long W, long H, int C, std::uint64_t coefficients, bool local,
+                               bool coefficient_file, int threads, double tables = 0);
+double table_bytes(long coefficients_x, long samples_x, long coefficients_y, long samples_y,
+                   double radius);
+void check_memory(std::uint64_t needed, const std::string& what);
+
+// The index of the first value that is NaN or infinite, or -1.
+long first_nonfinite(const double* v, std::size_t n);
+long first_nonfinite(const float* v, std::size_t n);
+// "x 3, y 7, channel G" of value q of interleaved rows of `width` pixels.
+std::string value_position(long q, long width, const std::vector<std::string>& names);
+
+}  // namespace sis

@@ -1,0 +1,745 @@
+#include "sis/engine.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <climits>
+#include <cmath>
+#include <condition_variable>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "sis/hex_lattice.h"
+#include "sis/memory.h"
+#include "sis/parallel.h"
+#include "sis/projection.h"
+
+namespace sis {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// True when no sample is NaN or infinite. A branch-free scan of the bits
+// (exponent all ones plus one carries into the sign bit) that compilers
+// vectorise: the common case costs little.
+bool all_finite(const float* v, std::size_t n) {
+  std::uint32_t carry = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    std::uint32_t u;
+    std::memcpy(&u, v + q, sizeof u);
+    carry |= (u & 0x7f800000u) + 0x00800000u;
+  }
+  return !(carry & 0x80000000u);
+}
+
+// Reads chunks 0, 1, ... in order on a thread of its own, chunk i into slot
+// i mod `slots`, once chunk i - slots (the slot's last) is released.
+class ReadAhead {
+ public:
+  ReadAhead(std::size_t count, int slots, std::function<void(std::size_t, int)> read)
+      : count_(count), slots_(slots), read_(std::move(read)), thread_([this] { loop(); }) {}
+  ~ReadAhead() {
+    {
+      std::lock_guard<std::mutex> lock(m_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  // The slot of chunk i, once read; rethrows the error of a failed read.
+  int wait(std::size_t i) {
+    std::unique_lock<std::mutex> lock(m_);
+    cv_.wait(lock, [&] { return read_count_ > i || error_; });
+    if (read_count_ <= i) std::rethrow_exception(error_);
+    return int(i % slots_);
+  }
+  // Chunk i is used: its slot may be read into again.
+  void release(std::size_t i) {
+    {
+      std::lock_guard<std::mutex> lock(m_);
+      released_ = i + 1;
+    }
+    cv_.notify_all();
+  }
+
+ private:
+  void loop() {
+    for (std::size_t i = 0; i < count_; ++i) {
+      {
+        std::unique_lock<std::mutex> lock(m_);
+        cv_.wait(lock, [&] { return stop_ || i < released_ + slots_; });
+        if (stop_) return;
+      }
+      try {
+        read_(i, int(i % slots_));
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(m_);
+        error_ = std::current_exception();
+        cv_.notify_all();
+        return;
+      }
+      {
+        std::lock_guard<std::mutex> lock(m_);
+        read_count_ = i + 1;
+      }
+      cv_.notify_all();
+    }
+  }
+  const std::size_t count_;
+  const std::size_t slots_;
+  std::function<void(std::size_t, int)> read_;
+  std::mutex m_;
+  std::condition_variable cv_;
+  std::size_t read_count_ = 0, released_ = 0;
+  bool stop_ = false;
+  std::exception_ptr error_;
+  std::thread thread_;  // last: starts once the members above are ready
+};
+
+// Values [k0, k1) of a row as float in v (converted from `half_row` when
+// given, else already there): false when one is not finite.
+bool row_values(const std::uint16_t* half_row, long k0, long k1, float* v) {
+  const std::size_t n = std::size_t(k1 - k0);
+  return half_row ? half_to_float(half_row + k0, v, n) : all_finite(v, n);
+}
+
+// Zeroes the non-finite values of v[0, n) (values k0... of their row); returns
+// how many, the first's index in *first.
+long zero_nonfinite(float* v, std::size_t n, long k0, long* first) {
+  long count = 0;
+  for (std::size_t q = 0; q < n; ++q)
+    if (!std::isfinite(v[q])) {
+      if (count++ == 0) *first = k0 + long(q);
+      v[q] = 0.0f;
+    }
+  return count;
+}
+
+// Adds a strip's non-finite samples to n: per strip row r of `rows`, count[r]
+// of them, the first at value first[r] of the row (read only when count[r]);
+// the strip's rows start at row y0 of `file`.
+template <typename Counts>
+void add_nonfinite(NonFiniteReport& n, const Counts& count, const Counts& first, long rows, long y0,
+                   int channels, const std::string& file) {
+  for (long r = 0; r < rows; ++r) {
+    if (count[r] && n.count == 0) {
+      n.channel = int(first[r] % channels);
+      n.x = first[r] / channels;
+      n.y = y0 + r;
+      n.file = file;
+    }
+    n.count += count[r];
+  }
+}
+
+
+// Above this many inputs each file is closed once its header is read (so
+// that any number of bands fits the descriptor limit); fewer stay open until
+// the reading is done: a decoder freed before the reading raises glibc's
+// dynamic mmap threshold, and the reading's buffers then stay on the heap.
+constexpr std::size_t kKeptOpen = 64;
+
+// The largest output side (OpenImageIO's image sides are int).
+constexpr long kMaxSide = 2147483647;
+
+// Channel names of samples in memory: Y; R, G, B; R, G, B, A; else c0, c1...
+std::vector<std::string> default_names(int channels) {
+  if (channels == 1) return {"Y"};
+  if (channels == 3) return {"R", "G", "B"};
+  if (channels == 4) return {"R", "G", "B", "A"};
+  std::vector<std::string> v;
+  for (int c = 0; c < channels; ++c) v.push_back("c" + std::to_string(c));
+  return v;
+}
+
+}  // namespace
+
+long first_nonfinite(const double* v, std::size_t n) {
+  for (std::size_t q = 0; q < n; ++q)
+    if (!std::isfinite(v[q])) return long(q);
+  return -1;
+}
+long first_nonfinite(const float* v, std::size_t n) {
+  for (std::size_t q = 0; q < n; ++q)
+    if (!std::isfinite(v[q])) return long(q);
+  return -1;
+}
+
+std::string value_position(long q, long width, const std::vector<std::string>& names) {
+  const int C = int(std::max<std::size_t>(1, names.size()));
+  const long c = q % C, p = q / C;
+  std::ostringstream m;
+  m << "x " << p % width << ", y " << p / width << ", channel "
+    << (c < long(names.size()) ? names[c] : std::to_string(c));
+  return m.str();
+}
+
+double table_bytes(long coefficients_x, long samples_x, long coefficients_y, long samples_y,
+                   double R) {
+  // an index and a weight per entry; an upsampled axis's entries also span
+  // the input model's reach (acquisition.cpp)
+  auto axis = [&](long n, long samples) {
+    const double ratio = double(samples) / double(std::max(1L, n));
+    const double entries = 2 * R * std::max(1.0, ratio) + 2 + (ratio < 1 ? 2 * 36 + 4 : 0);
+    return double(n) * (entries + 2 * R + 2) * 16;
+  };
+  return axis(coefficients_x, samples_x) + axis(coefficients_y, samples_y);
+}
+
+std::uint64_t projection_bytes(long W, long H, int C, std::uint64_t coefficients, bool local,
+                               bool coefficient_file, int threads, double tables) {
+  // While acquiring and resampling: the coefficients (double), the local
+  // input range (min and max, float) and the final image (float); while
+  // writing: the image, its converted copy and the coefficient file's float
+  // grid beside the coefficients; plus the readers' strips and decoders per
+  // thread and the program itself. In double: absurd sides pass 2^64.
+  const double values = double(W) * double(H) * C, grid = double(coefficients) * C;
+  const double acquire = 8 * grid + (local ? 8 * values : 0) + 4 * values;
+  const double write = 8 * values + (coefficient_file ? 12 * grid : 0);
+  const double bytes =
+      std::max(acquire, write) + tables + threads * double(16 << 20) + double(64 << 20);
+  return bytes < 1.8e19 ? std::uint64_t(bytes) : UINT64_MAX;
+}
+
+void check_memory(std::uint64_t needed, const std::string& what) {
+  const std::uint64_t available = available_memory();
+  if (needed > available)
+    throw RequestError("the request needs about " + format_bytes(needed) + " of memory (" + what +
+                       "), more than the " + format_bytes(available) +
+                       " available; ask for a smaller output (--size or --factor)");
+}
+
+InputSet inspect(const std::vector<ProjectionInput>& inputs) {
+  if (inputs.empty()) throw RequestError("no input");
+  InputSet set;
+  struct Header {
+    const ProjectionInput* input;
+    long width, height, full_x, full_y, full_w, full_h, data_x, data_y;
+    int channels, alpha;
+    std::vector<std::string> names;
+    bool half, srgb, coefficients;
+    std::string path;
+  };
+  std::vector<Header> h;
+  for (const ProjectionInput& in : inputs) {
+    if (in.image) {
+      const Image& im = *in.image;
+      if (im.width < 1 || im.height < 1 || im.channels < 1)
+        throw InputError(in.name + ": empty image");
+      const long full = in.rows > 0 ? in.rows : in.row + im.height;
+      h.push_back({&in, im.width, im.height, 0, 0, im.width, full, 0, in.row, im.channels, -1,
+                   in.channel_names.empty() ? default_names(im.channels) : in.channel_names,
+                   false, false, false, in.name});
+      continue;
+    }
+    auto reader = std::make_shared<ImageReader>(in.path);
+    const ImageReader& r = *reader;
+    h.push_back({&in, r.width(), r.height(), r.full_x(), r.full_y(), r.full_width(),
+                 r.full_height(), r.data_x(), r.data_y(), r.channels(), r.alpha_channel(),
+                 r.channel_names(), r.stores_half(), r.srgb_encoded(), is_coefficient_file(r),
+                 in.path});
+    if (inputs.size() > kKeptOpen) reader->release();
+    set.readers.push_back(std::move(reader));
+  }
+  std::stable_sort(h.begin(), h.end(), [](const Header& a, const Header& b) { return a.data_y < b.data_y; });
+  const Header& first = h.front();
+  set.width = first.width;
+  set.height = first.height;
+  set.channels = first.channels;
+  set.channel_names = first.names;
+  set.alpha = first.alpha;
+  set.coefficient_file = first.coefficients;
+  if (h.size() > 1) {
+    long next = first.full_y;
+    for (const Header& b : h) {
+      std::ostringstream m;
+      m << b.path << ": not a row band of " << first.path << "'s image: ";
+      if (b.coefficients) throw RequestError(b.path + ": a coefficient file cannot be a band");
+      if (b.channels != first.channels || b.names != first.names)
+        throw InputError(m.str() + "other channels");
+      if (b.full_x != first.full_x || b.full_y != first.full_y || b.full_w != first.full_w ||
+          b.full_h != first.full_h)
+        throw InputError(m.str() + "another display window");
+      if (b.data_x != b.full_x || b.width != b.full_w)
+        throw InputError(m.str() + "its data window does not span the full width");
+      if (b.data_y != next) {
+        m << "rows from " << b.data_y << " where row " << next << " was expected (gap or overlap)";
+        throw InputError(m.str());
+      }
+      next = b.data_y + b.height;
+    }
+    if (next != first.full_y + first.full_h) {
+      std::ostringstream m;
+      m << "the bands end at row " << next << " of a display window ending at row "
+        << first.full_y + first.full_h;
+      throw InputError(m.str());
+    }
+    set.width = first.full_w;
+    set.height = first.full_h;
+  } else if (first.input->image && first.full_h != first.height) {
+    throw InputError(first.path + ": a band of " + std::to_string(first.height) + " rows from row " +
+                     std::to_string(first.data_y) + " does not fill a grid of " +
+                     std::to_string(first.full_h) + " rows");
+  }
+  set.half = std::all_of(h.begin(), h.end(), [](const Header& b) { return b.half; });
+  set.srgb = std::all_of(h.begin(), h.end(), [](const Header& b) { return b.srgb; });
+  set.label = (first.input->image ? first.path : fs::path(first.path).filename().string()) +
+              (h.size() > 1 ? " and " + std::to_string(h.size() - 1) + " more bands" : "");
+  for (const Header& b : h) set.bands.push_back(*b.input);
+  return set;
+}
+
+namespace {
+
+using ValueHook = std::function<void(float*, std::size_t, std::size_t)>;
+
+// Rows per strip of in-memory bands: as a file's (about 1 MB of float).
+long memory_strip_rows(long width, int channels) {
+  const long row_bytes = std::max(1L, width * channels * 4L);
+  return std::clamp(16 * ((1L << 20) / row_bytes / 16), 16L, 256L);
+}
+
+// read_bands over images in memory: the same bands, strips and callbacks,
+// each strip copied into the worker's buffer first (the callbacks write
+// their values in place; the caller's samples are never changed).
+void read_memory_bands(const std::vector<const Image*>& images, const std::vector<std::string>& names,
+                       const BandPartition& bands, long strip, int workers,
+                       const BandCallbacks& cb) {
+  std::vector<long> start(1, 0);
+  for (const Image* im : images) start.push_back(start.back() + im->height);
+  const int T = int(std::clamp<long>(workers, 1, std::max(1L, bands.count())));
+  std::atomic<long> next{0}, stop{LONG_MAX};
+  std::mutex m;
+  long error_band = LONG_MAX;
+  std::exception_ptr error;
+  auto worker = [&](int t) {
+    Buffer<float> rows;
+    for (;;) {
+      const long b = next++;
+      if (b >= bands.count() || b > stop.load()) return;
+      try {
+        cb.begin(t, b);
+        bool whole = true;
+        for (long y = bands.begin(b); y < bands.end(b) && whole;) {
+          if (b > stop.load()) return;
+          const std::size_t f = std::upper_bound(start.begin(), start.end(), y) - start.begin() - 1;
+          const Image& im = *images[f];
+          const long y0 = y - start[f];
+          const long y1 = std::min({(y0 / strip + 1) * strip, bands.end(b) - start[f], im.height});
+          rows.resize(std::size_t(y1 - y0) * im.row_size());
+          std::memcpy(rows.data(), im.row(y0), rows.size() * sizeof(float));
+          whole = cb.strip(t, Strip{f, &names[f], y0, y1, y, nullptr, rows.data()});
+          y = start[f] + y1;
+        }
+        if (!whole) {
+          long s = stop.load();
+          while (b < s && !stop.compare_exchange_weak(s, b)) {
+          }
+          return;
+        }
+        cb.end(t, b);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(m);
+        if (b < error_band) error_band = b, error = std::current_exception();
+        long s = stop.load();
+        while (b < s && !stop.compare_exchange_weak(s, b)) {
+        }
+        return;
+      }
+    }
+  };
+  std::vector<std::thread> helpers;
+  for (int t = 1; t < T; ++t) helpers.emplace_back(worker, t);
+  worker(0);
+  for (auto& h : helpers) h.join();
+  if (error && error_band <= stop.load()) std::rethrow_exception(error);
+}
+
+// Reads and acquires the grid on the Cartesian lattice band by band: with
+// OpenEXR files (or samples in memory) each worker thread decodes its
+// band's strips and sums them while they are in its cache, into a band of
+// the acquisition and of the local range of its own; other formats are
+// read by one thread, the sums split among the threads by columns. Stops
+// at the first band with a non-finite sample when `stop`.
+NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop, const ValueHook& decode,
+                                  const ValueHook& compress, Acquisition& acquisition,
+                                  LocalRange& local, const BandPartition& bands,
+                                  const std::function<void(double)>& progress) {
+  const bool memory = in.bands.front().image != nullptr;
+  const bool half = in.half;
+  bool exr = true;
+  std::vector<std::string> paths;
+  std::vector<const Image*> images;
+  for (const ProjectionInput& b : in.bands) {
+    paths.push_back(memory ? b.name : b.path);
+    images.push_back(b.image);
+  }
+  if (!memory)
+    for (const auto& r : in.readers) exr = exr && r->format_name() == "openexr";
+  const int workers = exr ? int(std::min<long>(threads, bands.count())) : 1;
+  // A worker's own decoding: strips of about 1 MB, in its cache; OpenEXR's
+  // pool (one worker): strips of several of its blocks, one per pool thread.
+  long strip = 0;
+  if (memory) {
+    strip = memory_strip_rows(in.width, in.channels);
+  } else {
+    const ImageReader& first = *in.readers.front();
+    for (const auto& r : in.readers)
+      if (r->path() == in.bands.front().path) strip = workers > 1 ? decode_strip_rows(*r) : r->preferred_strip();
+    if (strip == 0) strip = workers > 1 ? decode_strip_rows(first) : first.preferred_strip();
+  }
+  const std::size_t row_size = std::size_t(in.width) * in.channels;
+  struct Worker {
+    std::unique_ptr<Acquisition::Band> acquisition;
+    std::unique_ptr<LocalRange::Band> range;
+    std::vector<std::atomic<long>> bad, bad_first;  // per strip row (pieces of a row run at once)
+    explicit Worker(long rows) : bad(rows), bad_first(rows) {}
+  };
+  std::vector<std::unique_ptr<Worker>> w;
+  for (int t = 0; t < workers; ++t) {
+    w.push_back(std::make_unique<Worker>(strip));
+    w.back()->acquisition = std::make_unique<Acquisition::Band>(acquisition, workers > 1 ? 1 : threads);
+    w.back()->range = std::make_unique<LocalRange::Band>(local);
+  }
+  std::vector<NonFiniteReport> bad(bands.count());  // per band, each written by the thread taking it
+  std::mutex progress_mutex;
+  long rows_done = 0;
+  BandCallbacks cb;
+  cb.begin = [&](int t, long b) {
+    w[t]->acquisition->begin(b);
+    w[t]->range->begin(b);
+  };
+  cb.strip = [&](int t, const Strip& s) {
+    Worker& k = *w[t];
+    const long y = s.global, rows = s.y1 - s.y0, y1 = y + rows;
+    for (long r = 0; r < rows; ++r) k.bad[r] = 0, k.bad_first[r] = LONG_MAX;
+    k.range->open(y, y1);
+    k.acquisition->add_rows(y, y1, [&](long gy, long k0, long k1, float* scratch) {
+      const long r = gy - y;
+      float* v = half ? scratch : s.floats + r * row_size + k0;
+      if (!row_values(half ? s.half + r * row_size : nullptr, k0, k1, v)) {
+        long first_bad = -1;
+        k.bad[r] += zero_nonfinite(v, std::size_t(k1 - k0), k0, &first_bad);
+        long seen = k.bad_first[r].load();
+        while (first_bad < seen && !k.bad_first[r].compare_exchange_weak(seen, first_bad)) {
+        }
+      }
+      if (decode) decode(v, std::size_t(k1 - k0), std::size_t(k0));
+      k.range->fold(gy, k0, k1, v);
+      if (compress) compress(v, std::size_t(k1 - k0), std::size_t(k0));
+      return static_cast<const float*>(v);
+    });
+    k.range->close(y1);
+    NonFiniteReport& n = bad[bands.of(y)];
+    add_nonfinite(n, k.bad, k.bad_first, rows, s.y0, in.channels, *s.path);
+    return !(stop && n.count);
+  };
+  cb.end = [&](int t, long b) {
+    w[t]->acquisition->end();
+    w[t]->range->end();
+    std::lock_guard<std::mutex> lock(progress_mutex);
+    rows_done += bands.end(b) - bands.begin(b);
+    if (progress) progress(double(rows_done) / bands.rows());
+  };
+  if (memory)
+    read_memory_bands(images, paths, bands, strip, workers, cb);
+  else
+    read_bands(paths, bands, strip, workers, half, cb);
+  NonFiniteReport all;
+  for (const NonFiniteReport& n : bad) {
+    if (n.count && all.count == 0) all = n;
+    else all.count += n.count;
+  }
+  return all;
+}
+
+// Reads and acquires the grid on the hexagonal lattice in order: strips are
+// read on a thread of their own into two slots (the next strip decodes
+// while this one is acquired), one file open at a time.
+NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop, const ValueHook& decode,
+                                  const ValueHook& compress, HexAcquisition& hexagonal,
+                                  LocalRange& local, const std::function<void(double)>& progress) {
+  struct Chunk {
+    std::size_t band;
+    long y0, y1, global;
+  };
+  std::vector<Chunk> chunks;
+  long strip = 0, g = 0;
+  for (std::size_t f = 0; f < in.bands.size(); ++f) {
+    const ProjectionInput& b = in.bands[f];
+    long rows = 0, step = 0;
+    if (b.image) {
+      rows = b.image->height;
+      step = std::min(rows, memory_strip_rows(in.width, in.channels));
+    } else {
+      for (const auto& r : in.readers)
+        if (r->path() == b.path) rows = r->height(), step = r->preferred_strip();
+    }
+    strip = std::max(strip, step);
+    for (long y = 0; y < rows; y += step) chunks.push_back({f, y, std::min(rows, y + step), g + y});
+    g += rows;
+  }
+  // Samples stored as half are read as they are and converted on the
+  // worker threads (OpenImageIO's conversion is serial and slower than
+  // decoding).
+  const bool half = in.half;
+  const std::size_t row_size = std::size_t(in.width) * in.channels;
+  const int slots = 2;
+  std::vector<Buffer<std::uint16_t>> half_rows(slots);  // unset: each strip is read into them
+  std::vector<Buffer<float>> float_rows(slots);
+  for (int b = 0; b < slots; ++b) {
+    if (half) half_rows[b].resize(strip * row_size);
+    float_rows[b].resize(strip * row_size);
+  }
+  // Per strip row: its non-finite samples (rows are checked at once on
+  // different threads).
+  std::vector<long> strip_bad(strip), strip_bad_first(strip);
+  std::unique_ptr<ImageReader> file;
+  auto read = [&](std::size_t i, int b) {
+    const Chunk& ch = chunks[i];
+    const ProjectionInput& band = in.bands[ch.band];
+    if (band.image) {
+      std::memcpy(float_rows[b].data(), band.image->row(ch.y0),
+                  std::size_t(ch.y1 - ch.y0) * row_size * sizeof(float));
+      return;
+    }
+    if (!file || file->path() != band.path) file.reset(), file = std::make_unique<ImageReader>(band.path);
+    if (half)
+      file->read_rows_half(ch.y0, ch.y1, half_rows[b].data());
+    else
+      file->read_rows(ch.y0, ch.y1, float_rows[b].data());
+  };
+  NonFiniteReport bad;
+  ReadAhead ahead(chunks.size(), slots, read);
+  for (std::size_t i = 0; i < chunks.size(); ++i) {
+    const Chunk& ch = chunks[i];
+    const long y = ch.global, y1 = ch.global + ch.y1 - ch.y0;
+    const int b = ahead.wait(i);  // rethrows a read error
+    const long rows = y1 - y;
+    float* data = float_rows[b].data();
+    const long values = long(row_size);
+    // Non-finite samples zeroed (and counted), ...
+    parallel_for(rows, threads, [&](long r0, long r1) {
+      for (long r = r0; r < r1; ++r) {
+        float* v = data + r * row_size;
+        strip_bad[r] = 0;
+        if (!row_values(half ? half_rows[b].data() + r * row_size : nullptr, 0, values, v))
+          strip_bad[r] = zero_nonfinite(v, row_size, 0, &strip_bad_first[r]);
+      }
+    });
+    // ... then decoded, their local range taken and highlights compressed.
+    local.open(y, y1);
+    parallel_for(values, threads, [&](long k0, long k1) {
+      for (long r = 0; r < rows; ++r) {
+        float* v = data + r * row_size + k0;
+        if (decode) decode(v, std::size_t(k1 - k0), std::size_t(k0));
+        local.fold(y + r, k0, k1, v);
+        if (compress) compress(v, std::size_t(k1 - k0), std::size_t(k0));
+      }
+    });
+    local.close(y1);
+    hexagonal.add_rows(y, y1, data);
+    const ProjectionInput& band = in.bands[ch.band];
+    add_nonfinite(bad, strip_bad, strip_bad_first, rows, ch.y0, in.channels,
+                  band.image ? band.name : band.path);
+    ahead.release(i);
+    if (bad.count && stop) break;
+    if (progress) progress(double(y1) / in.height);
+  }
+  return bad;
+}
+
+}  // namespace
+
+Projection project(const ProjectionRequest& rq, InputSet inputs) {
+  Projection p;
+  p.inputs = std::move(inputs);
+  const InputSet& in = p.inputs;
+  if (in.coefficient_file)
+    throw RequestError(in.bands.front().path +
+                       " is a coefficient file: it is evaluated (load_coefficients), not projected");
+  const long W = rq.width, H = rq.height;
+  if (W < 1 || H < 1 || W > kMaxSide || H > kMaxSide) {
+    std::ostringstream m;
+    m << "an output of " << W << " x " << H << " pixels: each side from 1 to " << kMaxSide;
+    throw RequestError(m.str());
+  }
+  const int threads = std::max(1, rq.threads);
+  const int C = in.channels;
+  const bool hex = rq.space.kind == SpaceKind::Hexagonal;
+  if (hex && rq.method != Method::MinError)
+    throw RequestError("--lattice hex has the min-error method only");
+  if (hex && rq.prefilter != PrefilterMethod::FFT)
+    throw RequestError("--lattice hex has the fft prefilter only");
+  const Kernel generator = hex ? hex_generator_kernel(rq.space.hex_order) : rq.space.generator;
+  if (rq.method == Method::MinError && !generator.is_bspline())
+    throw RequestError("--method min-error needs a B-spline generator (box, tent, quadratic, cubic, "
+                       "bspline:N), not " + generator.name() + "; use --method conventional");
+  std::uint64_t coefficients = std::uint64_t(W) * std::uint64_t(H);
+  const double density = rq.space.density;
+  if (hex) {
+    if (!(std::isfinite(density) && density > 0)) {
+      std::ostringstream m;
+      m << "--density " << density << ": expected a finite number above 0";
+      throw RequestError(m.str());
+    }
+    // The hexagonal acquisition sums samples under each lattice point: it
+    // needs at least one sample per lattice step (it has no interpolation
+    // model of the input, as the Cartesian one has where it upsamples), and
+    // a lattice step no larger than the frame. Checked before the layout,
+    // whose search for a transform size would run on an absurd grid.
+    const double h = Lattice::hexagonal(density).matrix()[0];
+    const double spacing = std::max(double(W) / double(in.width), double(H) / double(in.height));
+    std::ostringstream m;
+    m.precision(4);
+    if (h < spacing) {
+      m << "--lattice hex: the lattice's step (" << h << " output pixels at --density " << density
+        << ") is finer than the input's sample spacing (" << spacing
+        << " output pixels); the hexagonal acquisition needs a sample per lattice step: use "
+           "--density at most "
+        << 2 / (std::sqrt(3.0) * spacing * spacing) << ", or a smaller output";
+      throw RequestError(m.str());
+    }
+    if (h > double(std::min(W, H))) {
+      m << "--density " << density << ": the hexagonal lattice's step (" << h
+        << " output pixels) is larger than the " << W << " x " << H << " frame";
+      throw RequestError(m.str());
+    }
+    const HexLayout layout = hex_layout(density, double(W), double(H), hex_default_margin(rq.space.hex_order));
+    coefficients = std::uint64_t(layout.columns) * std::uint64_t(layout.rows);
+  }
+  p.estimated_bytes = projection_bytes(W, H, C, coefficients, true, rq.coefficient_file, threads,
+                                       table_bytes(W, in.width, H, in.height, generator.radius()));
+  check_memory(p.estimated_bytes, "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
+                                      std::to_string(C) + " output");
+
+  const int alpha = in.alpha;
+  auto for_colour = [C, alpha](float* data, std::size_t n, double (*f)(double), std::size_t k0) {
+    for (std::size_t q = 0; q < n; ++q)
+      if (int((k0 + q) % C) != alpha) data[q] = static_cast<float>(f(data[q]));
+  };
+  // Integer samples tagged sRGB (PNG, JPEG, 8- and 16-bit TIFF) are decoded
+  // to linear light first: the method filters radiance, and an 8-bit output
+  // encodes again (a flat 128 stays 128).
+  ValueHook decode, compress;
+  if (in.srgb)
+    decode = [&](float* v, std::size_t n, std::size_t k0) {
+      for_colour(v, n, [](double x) { return double(srgb_to_linear(float(x))); }, k0);
+    };
+  if (rq.highlight_compress)
+    compress = [&](float* v, std::size_t n, std::size_t k0) { for_colour(v, n, highlight_compress, k0); };
+  p.highlight_compressed = rq.highlight_compress;
+  const bool stop = !rq.zero_nonfinite;
+  NonFiniteReport bad;
+  Coefficients k;
+  const auto t = Clock::now();
+  if (!hex) {
+    const AcquisitionPlan plan(in.width, in.height, C, double(W), double(H), Lattice::cartesian(),
+                               generator, rq.boundary, rq.method);
+    Acquisition cartesian(plan, threads);
+    p.local_range = std::make_unique<LocalRange>(in.width, in.height, C, W, H, plan.bands().band_rows());
+    bad = acquire_cartesian(in, threads, stop, decode, compress, cartesian, *p.local_range,
+                            plan.bands(), rq.progress);
+    if (!bad.count || !stop) k = cartesian.finish();
+  } else {
+    // The plan (the weights of every input row and column, some
+    // milliseconds) is made while the first strips decode.
+    const HexLayout layout =
+        hex_layout(density, double(W), double(H), hex_default_margin(rq.space.hex_order));
+    const HexAcquisitionPlan plan(in.width, in.height, C, double(W), double(H), layout,
+                                  rq.space.hex_order, rq.boundary, rq.space.quadrature);
+    HexAcquisition hexagonal(plan, threads);
+    p.local_range = std::make_unique<LocalRange>(in.width, in.height, C, W, H);
+    bad = acquire_hexagonal(in, threads, stop, decode, compress, hexagonal, *p.local_range,
+                            rq.progress);
+    if (!bad.count || !stop) k = hexagonal.finish();
+  }
+  p.acquire_seconds = seconds_since(t);
+  for (auto& r : p.inputs.readers) r->release();  // the decoders' buffers, before the later stages
+  if (bad.count) {
+    std::ostringstream m;
+    m << bad.file << ": non-finite sample (NaN or Inf) at x " << bad.x << ", y " << bad.y
+      << ", channel "
+      << (bad.channel < int(in.channel_names.size()) ? in.channel_names[bad.channel]
+                                                     : std::to_string(bad.channel));
+    bad.where = m.str();
+    if (stop) throw InputError(bad.where + "; use --nonfinite zero to replace them with 0");
+  }
+  p.nonfinite = bad;
+  const auto t2 = Clock::now();
+  prefilter(k, threads, rq.prefilter);
+  p.prefilter_seconds = seconds_since(t2);
+  // Coefficients are kept in float, as a coefficient file stores them, so
+  // that evaluating a written coefficient file reproduces this run exactly.
+  parallel_for(long(k.c.data.size()), threads, [&](long q0, long q1) {
+    for (long q = q0; q < q1; ++q) k.c.data[q] = static_cast<float>(k.c.data[q]);
+  });
+  // Finite samples near float's largest value can still overflow there.
+  const long overflow = first_nonfinite(k.c.data.data(), k.c.data.size());
+  if (overflow >= 0)
+    throw InputError(in.label + ": the samples are too large: the coefficients pass float's "
+                     "largest value (3.4e38) at coefficient " +
+                     value_position(overflow, k.c.width, in.channel_names) + "; nothing written");
+  p.coefficients = std::move(k);
+  return p;
+}
+
+Projection project(const ProjectionRequest& rq) { return project(rq, inspect(rq.inputs)); }
+
+Coefficients load_coefficients(const std::string& path, bool zero_nonfinite,
+                               NonFiniteReport* replaced) {
+  ImageReader file(path);
+  const std::uint64_t stored = std::uint64_t(file.width()) * std::uint64_t(file.height());
+  check_memory(projection_bytes(0, 0, file.channels(), stored + stored / 2, false, false, 1),
+               "a coefficient grid of " + std::to_string(file.width()) + " x " +
+                   std::to_string(file.height()) + " x " + std::to_string(file.channels()));
+  Coefficients k = read_coefficients(file);
+  const long bad = first_nonfinite(k.c.data.data(), k.c.data.size());
+  if (bad >= 0) {
+    NonFiniteReport n;
+    const std::vector<std::string> names = file.channel_names();
+    n.where = path + ": non-finite coefficient (NaN or Inf) at " + value_position(bad, k.c.width, names);
+    if (!zero_nonfinite) throw InputError(n.where + "; use --nonfinite zero to replace them with 0");
+    for (double& v : k.c.data)
+      if (!std::isfinite(v)) v = 0, ++n.count;
+    n.file = path;
+    if (replaced) *replaced = n;
+  }
+  return k;
+}
+
+FinalImage final_image(const Coefficients& k, const Display& display, long W, long H,
+                       bool highlight_expand_, Clamp clamp, const LocalRange* local, int threads,
+                       const std::string& label, const std::vector<std::string>& names, int alpha) {
+  FinalImage f;
+  f.image = sis::final_image(k, display, W, H, threads);
+  Image& image = f.image;
+  const int C = image.channels;
+  if (highlight_expand_)
+    for (std::size_t q = 0; q < image.data.size(); ++q)
+      if (int(q % C) != alpha) image.data[q] = static_cast<float>(highlight_expand(image.data[q]));
+  f.own_range = local && local->min().width == W && local->min().height == H;
+  f.before = report_range(image, f.own_range ? local : nullptr, threads);
+  apply_clamp(image, clamp, local);
+  f.after = clamp == Clamp::None ? f.before : report_range(image, nullptr, threads);
+  // Never a non-finite pixel from finite coefficients without saying so:
+  // resampling or the highlight expansion can pass float's range.
+  const long bad = first_nonfinite(image.data.data(), image.data.size());
+  if (bad >= 0)
+    throw InputError(label + ": the final image passes float's range at " +
+                     value_position(bad, W, names) +
+                     "; nothing written");
+  return f;
+}
+
+}  // namespace sis
