@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "cli.h"
+#include "sis/engine.h"
 #include "sis/imageio.h"
 #include "sis/hex_lattice.h"
 #include "sis/metrics.h"
@@ -215,7 +216,8 @@ int run(const Options& o) {
     if (reader.attribute("sis:highlight_compress") == "1")
       throw UsageError("--coeffs " + o.coeffs + " holds a highlight-compressed approximation: its "
                        "continuous error is not measured");
-    const Coefficients k = read_coefficients(reader);
+    reader.release();
+    const Coefficients k = load_coefficients(o.coeffs, false);
     Report inner;
     inner.string("coeffs", o.coeffs);
     inner.string("method", k.min_error ? "min-error" : "conventional");
@@ -307,6 +309,9 @@ int main(int argc, char** argv) {
   try {
     return run(o);
   } catch (const UsageError& e) {
+    std::cerr << "simetrics: " << e.what() << "\n";
+    return kExitUsage;
+  } catch (const RequestError& e) {
     std::cerr << "simetrics: " << e.what() << "\n";
     return kExitUsage;
   } catch (const InputError& e) {

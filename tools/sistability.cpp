@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "sis/engine.h"
 #include "sis/projection.h"
 #include "sis/range.h"
 
@@ -31,6 +32,20 @@ struct MethodSpec {
   Method method;
   Display display;
 };
+
+// The projection of samples in memory by the engine, the coefficients kept
+// in double (the measures here are of the method, not of float storage).
+Coefficients project_noise(const Image& in, long W, long H, const MethodSpec& m, Boundary rule) {
+  ProjectionRequest rq;
+  rq.inputs = {ProjectionInput::memory(in, "noise")};
+  rq.width = W;
+  rq.height = H;
+  rq.space.generator = m.kernel;
+  rq.method = m.method;
+  rq.boundary = rule;
+  rq.float_coefficients = false;
+  return project(rq).coefficients;
+}
 
 std::vector<MethodSpec> methods() {
   const Display c = Display::centred(), aa = Display::antialiased_2x2(), px = Display::pixel();
@@ -118,11 +133,7 @@ int main(int argc, char** argv) {
                     ", \"seed\": " + std::to_string(seed) + ", \"sigma\": " + num(sigma) + ", \"methods\": [";
   bool first = true;
   for (const MethodSpec& m : methods()) {
-    ProjectionOptions o;
-    o.generator = m.kernel;
-    o.method = m.method;
-    o.boundary = Boundary::Periodic;
-    const Image p = final_image(project(in, N, N, o), m.display, N, N);
+    const Image p = final_image(project_noise(in, N, N, m, Boundary::Periodic), m.display, N, N);
     const double gain = variance(p.data.data(), p.data.size()) / unit;
     const double theory = m.method == Method::MinError ? min_error_theory(m.kernel.degree(), m.display)
                                                        : conventional_theory(m.kernel, s);
@@ -146,10 +157,7 @@ int main(int argc, char** argv) {
         over = r.overshoot;
         under = r.undershoot;
       } else {
-        ProjectionOptions o;
-        o.generator = m.kernel;
-        o.method = m.method;
-        const Image p = final_image(project(step, W, 4, o), m.display, W, 4);
+        const Image p = final_image(project_noise(step, W, 4, m, Boundary::Mirror), m.display, W, 4);
         for (long x = 0; x < W; ++x) {
           over = std::max(over, double(p.at(x, 2, 0)) - 1);
           under = std::max(under, -double(p.at(x, 2, 0)));

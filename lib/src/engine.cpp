@@ -681,9 +681,10 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
   p.prefilter_seconds = seconds_since(t2);
   // Coefficients are kept in float, as a coefficient file stores them, so
   // that evaluating a written coefficient file reproduces this run exactly.
-  parallel_for(long(k.c.data.size()), threads, [&](long q0, long q1) {
-    for (long q = q0; q < q1; ++q) k.c.data[q] = static_cast<float>(k.c.data[q]);
-  });
+  if (rq.float_coefficients)
+    parallel_for(long(k.c.data.size()), threads, [&](long q0, long q1) {
+      for (long q = q0; q < q1; ++q) k.c.data[q] = static_cast<float>(k.c.data[q]);
+    });
   // Finite samples near float's largest value can still overflow there.
   const long overflow = first_nonfinite(k.c.data.data(), k.c.data.size());
   if (overflow >= 0)

@@ -100,6 +100,10 @@ struct ProjectionRequest {
   bool highlight_compress = false;
   int threads = 1;
   bool coefficient_file = false;   // the caller will also write the coefficients (memory estimate)
+  // The sample type the coefficients are kept in: float (as a coefficient
+  // file stores them, so that evaluating one reproduces the run exactly) or
+  // double (the prefilter's own precision).
+  bool float_coefficients = true;
   std::function<void(double)> progress;  // fraction of the input read, from the worker threads
 };
 
@@ -111,7 +115,7 @@ struct NonFiniteReport {
 };
 
 struct Projection {
-  Coefficients coefficients;  // kept in float precision, as a coefficient file stores them
+  Coefficients coefficients;  // kept in the request's sample type
   InputSet inputs;
   std::unique_ptr<LocalRange> local_range;  // of the samples under each output pixel
   NonFiniteReport nonfinite;                // those replaced by 0

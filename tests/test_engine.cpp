@@ -1,0 +1,146 @@
+// The engine driven directly (sis/engine.h), on files and on samples in
+// memory: the coefficients and the final image are siproject's, bit for
+// bit, on both lattices; the reports are those a direct count gives; the
+// caller's samples are never changed.
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+
+#include "sis/engine.h"
+#include "sis/imageio.h"
+#include "support.h"
+
+namespace fs = std::filesystem;
+using namespace sis;
+using namespace sis::test;
+
+#ifndef SIPROJECT
+#error "SIPROJECT must name the siproject binary"
+#endif
+
+namespace {
+
+class Engine : public TempDirTest {};
+
+void write_float(const std::string& path, const Image& img) {
+  OIIO::ImageSpec spec(int(img.width), int(img.height), img.channels, OIIO::TypeDesc::FLOAT);
+  auto out = OIIO::ImageOutput::create(path);
+  ASSERT_TRUE(out && out->open(path, spec) &&
+              out->write_image(OIIO::TypeDesc::FLOAT, img.data.data()) && out->close());
+}
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * 4) == 0;
+}
+
+std::vector<float> as_floats(const Grid<double>& g) {
+  return std::vector<float>(g.data.begin(), g.data.end());
+}
+
+std::vector<float> file_floats(const std::string& path) {
+  const Image img = read_image(path);
+  return std::vector<float>(img.data.begin(), img.data.end());
+}
+
+}  // namespace
+
+TEST_F(Engine, FilesAndMemoryGiveSiprojectsBits) {
+  // 603 rows: three bands of the acquisition, read on two workers.
+  const Image img = random_image(201, 603, 3, 21);
+  const Image before = img;
+  write_float(path("in.exr"), img);
+  struct Case {
+    std::string args;
+    Space space;
+    Method method;
+    Display display;
+  };
+  Space cubic, mitchell, hexq;
+  mitchell.generator = Kernel::mitchell();
+  hexq.kind = SpaceKind::Hexagonal;
+  const Case cases[] = {
+      {"--factor 3", cubic, Method::MinError, Display::antialiased_2x2()},
+      {"--factor 3 --generator mitchell", mitchell, Method::Conventional, Display::centred()},
+      {"--factor 3 --lattice hex", hexq, Method::MinError, Display::antialiased_2x2()},
+  };
+  for (const Case& c : cases) {
+    const Result r = run_tool(SIPROJECT, path("in.exr") + " -o " + path("out.exr") + " --coeffs " +
+                                             path("c.exr") + " -d float -q " + c.args);
+    ASSERT_EQ(r.status, 0) << r.output;
+    const std::vector<float> want_c = file_floats(path("c.exr")), want = file_floats(path("out.exr"));
+    for (bool memory : {false, true}) {
+      ProjectionRequest rq;
+      rq.inputs = {memory ? ProjectionInput::memory(img) : ProjectionInput::file(path("in.exr"))};
+      rq.width = 67;
+      rq.height = 201;
+      rq.space = c.space;
+      rq.method = c.method;
+      rq.threads = 2;
+      const Projection p = project(rq);
+      EXPECT_TRUE(same_bits(as_floats(p.coefficients.c), want_c)) << c.args << (memory ? " memory" : " file");
+      const FinalImage f = final_image(p.coefficients, c.display, 67, 201, false, Clamp::None,
+                                       p.local_range.get(), 2, "in", p.inputs.channel_names);
+      EXPECT_TRUE(same_bits(std::vector<float>(f.image.data.begin(), f.image.data.end()), want))
+          << c.args << (memory ? " memory" : " file");
+    }
+  }
+  EXPECT_EQ(img.data, before.data);  // the caller's samples, untouched
+}
+
+TEST_F(Engine, MemoryBandsAndReports) {
+  // Samples in memory as three bands of one grid, with a NaN: the result
+  // equals the whole image's, the non-finite report names the band, the
+  // position and the count; under the error policy it is an InputError.
+  Image img = random_image(40, 300, 1, 3);
+  img.at(7, 170, 0) = NAN;
+  img.at(9, 260, 0) = INFINITY;
+  Image a(40, 100, 1), b(40, 100, 1), c(40, 100, 1);
+  std::copy(img.row(0), img.row(100), a.data.begin());
+  std::copy(img.row(100), img.row(200), b.data.begin());
+  std::copy(img.row(200), img.row(300), c.data.begin());
+  ProjectionRequest rq;
+  rq.width = 10;
+  rq.height = 75;
+  rq.zero_nonfinite = true;
+  rq.threads = 2;
+  rq.inputs = {ProjectionInput::memory(img, "whole")};
+  const Projection whole = project(rq);
+  ProjectionInput pa = ProjectionInput::memory(a, "a"), pb = ProjectionInput::memory(b, "b"),
+                  pc = ProjectionInput::memory(c, "c");
+  pb.row = 100;
+  pc.row = 200;
+  for (ProjectionInput* p : {&pa, &pb, &pc}) p->rows = 300;
+  rq.inputs = {pc, pa, pb};  // any order
+  const Projection banded = project(rq);
+  EXPECT_EQ(banded.coefficients.c.data, whole.coefficients.c.data);
+  EXPECT_EQ(banded.nonfinite.count, 2);
+  EXPECT_EQ(banded.nonfinite.file, "b");
+  EXPECT_EQ(banded.nonfinite.x, 7);
+  EXPECT_EQ(banded.nonfinite.y, 70);  // row 70 of band b
+  EXPECT_EQ(banded.inputs.label, "a and 2 more bands");
+  rq.zero_nonfinite = false;
+  EXPECT_THROW(project(rq), InputError);
+  rq.inputs = {pa, pc};  // a gap
+  EXPECT_THROW(project(rq), InputError);
+}
+
+TEST_F(Engine, RequestsItCannotDoAreRequestErrors) {
+  const Image img = random_image(32, 32, 3, 1);
+  ProjectionRequest rq;
+  rq.inputs = {ProjectionInput::memory(img)};
+  rq.width = 16;
+  rq.height = 16;
+  rq.space.kind = SpaceKind::Hexagonal;
+  rq.space.density = 1e30;
+  EXPECT_THROW(project(rq), RequestError);
+  rq.space = Space{};
+  rq.width = 3000000000;
+  EXPECT_THROW(project(rq), RequestError);
+  rq.width = 16;
+  rq.space.generator = Kernel::mitchell();
+  EXPECT_THROW(project(rq), RequestError);  // min-error needs a B-spline
+}
