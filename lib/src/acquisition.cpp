@@ -8,7 +8,6 @@
 
 #include "sis/box_spline.h"
 #include "sis/parallel.h"
-#include "sis/prefetch.h"
 
 namespace sis {
 
@@ -168,14 +167,10 @@ T* aligned(T* p) {
   return reinterpret_cast<T*>((reinterpret_cast<std::uintptr_t>(p) + 63) & ~std::uintptr_t(63));
 }
 
-// Rows held in memory: each piece is where it lies; the same columns a few
-// rows on are prefetched.
+// Rows held in memory: each piece is where it lies.
 template <typename T>
-auto in_memory(long y0, long y1, const T* rows, std::size_t row_size) {
-  return [=](long y, long k0, long k1, T*) {
-    prefetch_ahead(rows, y - y0, y1 - y0, row_size, k0, k1);
-    return rows + (y - y0) * row_size + k0;
-  };
+auto in_memory(long y0, const T* rows, std::size_t row_size) {
+  return [=](long y, long k0, long, T*) { return rows + (y - y0) * row_size + k0; };
 }
 
 }  // namespace
@@ -231,11 +226,11 @@ Acquisition::~Acquisition() = default;
 
 void Acquisition::add_rows(long y0, long y1, const float* rows) {
   const std::size_t row_size = std::size_t(plan_.input_width()) * plan_.channels();
-  add_in_order<float>(y0, y1, in_memory(y0, y1, rows, row_size));
+  add_in_order<float>(y0, y1, in_memory(y0, rows, row_size));
 }
 void Acquisition::add_rows(long y0, long y1, const double* rows) {
   const std::size_t row_size = std::size_t(plan_.input_width()) * plan_.channels();
-  add_in_order<double>(y0, y1, in_memory(y0, y1, rows, row_size));
+  add_in_order<double>(y0, y1, in_memory(y0, rows, row_size));
 }
 void Acquisition::add_rows(long y0, long y1, const PieceSource& piece) {
   add_in_order<float>(y0, y1, piece);
@@ -323,7 +318,7 @@ void Acquisition::Band::begin(long band) {
 
 void Acquisition::Band::add_rows(long y0, long y1, const float* rows) {
   const std::size_t row_size = std::size_t(whole_.plan_.input_width()) * whole_.plan_.channels();
-  add<float>(y0, y1, in_memory(y0, y1, rows, row_size));
+  add<float>(y0, y1, in_memory(y0, rows, row_size));
 }
 void Acquisition::Band::add_rows(long y0, long y1, const PieceSource& piece) { add<float>(y0, y1, piece); }
 

@@ -15,24 +15,6 @@ double AxisWeights::sum(long t) const {
   return s;
 }
 
-AxisWeights AxisWeights::transposed() const {
-  AxisWeights out;
-  out.targets = sources;
-  out.sources = targets;
-  out.offset.assign(sources + 1, 0);
-  for (long i : index) ++out.offset[i + 1];
-  for (long s = 0; s < sources; ++s) out.offset[s + 1] += out.offset[s];
-  out.index.resize(index.size());
-  out.weight.resize(weight.size());
-  std::vector<long> fill(out.offset.begin(), out.offset.end() - 1);
-  for (long t = 0; t < targets; ++t)  // targets in increasing order: stays sorted
-    for (long e = begin(t); e < end(t); ++e) {
-      const long pos = fill[index[e]]++;
-      out.index[pos] = t;
-      out.weight[pos] = weight[e];
-    }
-  return out;
-}
 
 namespace {
 

@@ -88,8 +88,7 @@ class Acquisition {
   // The pieces of a row are disjoint and cover it; each is asked for once,
   // on the worker threads, pieces of different columns at once (the same
   // columns in increasing row order), so that per-row work (decoding,
-  // checks) runs in parallel with the sums. A source may prefetch the same
-  // columns of a later row (prefetch.h): the next calls will ask for them.
+  // checks) runs in parallel with the sums.
   using PieceSource = std::function<const float*(long y, long k0, long k1, float* scratch)>;
   void add_rows(long y0, long y1, const PieceSource& piece);
   long next_row() const { return next_row_; }

@@ -20,8 +20,6 @@ struct AxisWeights {
   long begin(long t) const { return offset[t]; }
   long end(long t) const { return offset[t + 1]; }
   double sum(long t) const;  // sum of the weights of target t
-  // The transpose: for each source, the targets it contributes to.
-  AxisWeights transposed() const;
 };
 
 // The table applied to one row of `channels` interleaved channels (sources
