@@ -20,6 +20,9 @@
 #include <fstream>
 #include <thread>
 
+#include <OpenEXR/ImfArray.h>
+#include <OpenEXR/ImfRgbaFile.h>
+
 #include "sis/imageio.h"
 #include "support.h"
 
@@ -646,4 +649,87 @@ TEST_F(Faults, CoefficientFileMetadataIsChecked) {
     EXPECT_NE(r.output.find(key), std::string::npos) << edit << ": " << r.output;
     EXPECT_FALSE(fs::exists(path("x.exr"))) << edit;
   }
+}
+
+TEST_F(Faults, OpenExrKindsOpenImageIORefusesOrHides) {
+  // A luminance-chroma file (subsampled RY and BY), which OpenImageIO 2.4
+  // refuses, is read as RGB through OpenEXR's RGBA interface: the result is
+  // that of the same RGB values in an ordinary half file, at every thread
+  // count. A multi-resolution file reads level 0 and says so with -v; a
+  // multi-part file warns that its first part is used; a truncated file
+  // says truncated; a deep file names its kind; an empty file says empty.
+  const long w = 300, h = 530;
+  Imf::Array2D<Imf::Rgba> px(h, w);
+  const Image src = random_image(w, h, 3, 12);
+  for (long y = 0; y < h; ++y)
+    for (long x = 0; x < w; ++x)
+      px[y][x] = Imf::Rgba(src.at(x, y, 0), src.at(x, y, 1), src.at(x, y, 2), 1.0f);
+  {
+    Imf::RgbaOutputFile out(path("yc.exr").c_str(), int(w), int(h), Imf::WRITE_YC);
+    out.setFrameBuffer(&px[0][0], 1, std::size_t(w));
+    out.writePixels(int(h));
+  }
+  ASSERT_TRUE(ImageReader::is_luminance_chroma(path("yc.exr")));
+  Image rgb(w, h, 3);
+  {
+    Imf::RgbaInputFile in(path("yc.exr").c_str());
+    Imf::Array2D<Imf::Rgba> back(h, w);
+    in.setFrameBuffer(&back[0][0], 1, std::size_t(w));
+    in.readPixels(0, int(h) - 1);
+    for (long y = 0; y < h; ++y)
+      for (long x = 0; x < w; ++x) {
+        rgb.at(x, y, 0) = back[y][x].r;
+        rgb.at(x, y, 1) = back[y][x].g;
+        rgb.at(x, y, 2) = back[y][x].b;
+      }
+  }
+  write_exr(path("rgb.exr"), rgb, true);
+  ASSERT_EQ(run(path("rgb.exr") + " -o " + path("ref.exr") + " --factor 2 -d float -q").status, 0);
+  for (int threads : {1, 2, 3}) {
+    const Result r = run(path("yc.exr") + " -o " + path("o.exr") + " --factor 2 -d float -q --threads " +
+                         std::to_string(threads));
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_EQ(pixels(path("o.exr")), pixels(path("ref.exr"))) << threads;
+  }
+  // multi-resolution: level 0, said with -v
+  ASSERT_EQ(shell("oiiotool " + path("rgb.exr") + " -otex " + path("mip.exr")).status, 0);
+  Result r = run(path("mip.exr") + " -o " + path("m.exr") + " --factor 2 -d float -v");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("level 0 of 10"), std::string::npos) << r.output;
+  // multi-part: the first part, with a warning
+  {
+    OIIO::ImageSpec specs[2] = {OIIO::ImageSpec(int(w), int(h), 3, OIIO::TypeDesc::HALF),
+                                OIIO::ImageSpec(8, 8, 1, OIIO::TypeDesc::HALF)};
+    specs[0].attribute("oiio:subimagename", "first");
+    specs[1].attribute("oiio:subimagename", "second");
+    specs[1].full_width = int(w);  // the parts share a display window
+    specs[1].full_height = int(h);
+    auto out = OIIO::ImageOutput::create(path("parts.exr"));
+    std::vector<float> small(64, 0.5f);
+    ASSERT_TRUE(out && out->open(path("parts.exr"), 2, specs) &&
+                out->write_image(OIIO::TypeDesc::FLOAT, rgb.data.data()) &&
+                out->open(path("parts.exr"), specs[1], OIIO::ImageOutput::AppendSubimage) &&
+                out->write_image(OIIO::TypeDesc::FLOAT, small.data()) && out->close())
+        << (out ? out->geterror() : OIIO::geterror());
+  }
+  r = run(path("parts.exr") + " -o " + path("p.exr") + " --factor 2 -d float");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("has 2 parts; its first is projected"), std::string::npos) << r.output;
+  EXPECT_EQ(pixels(path("p.exr")), pixels(path("ref.exr")));
+  // truncated, deep, empty
+  const std::string whole = slurp(path("rgb.exr"));
+  put(path("cut.exr"), whole.substr(0, 300));
+  r = run(path("cut.exr") + " -o " + path("x.exr") + " --factor 2");
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_NE(r.output.find("cut.exr: truncated file"), std::string::npos) << r.output;
+  ASSERT_EQ(shell("oiiotool " + path("rgb.exr") + " --ch R,G,B,A=1.0,Z=0.5 --deepen -o " +
+                  path("deep.exr")).status, 0);
+  r = run(path("deep.exr") + " -o " + path("x.exr") + " --factor 2");
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_NE(r.output.find("deep images are not supported"), std::string::npos) << r.output;
+  put(path("empty.exr"), "");
+  r = run(path("empty.exr") + " -o " + path("x.exr") + " --factor 2");
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_NE(r.output.find("empty.exr: empty file"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("x.exr")));
 }

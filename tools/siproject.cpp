@@ -223,6 +223,17 @@ int run(const Options& o) {
   std::vector<ProjectionInput> inputs;
   for (const std::string& in : o.inputs) inputs.push_back(ProjectionInput::file(in));
   InputSet set = inspect(inputs);
+  for (const auto& r : set.readers) {
+    if (r->parts() > 1 && !o.quiet)
+      std::fprintf(stderr, "siproject: warning: %s has %d parts; its first is projected\n",
+                   r->path().c_str(), r->parts());
+    if (r->levels() > 1 && o.verbose)
+      std::fprintf(stderr, "siproject: %s: level 0 of %d (a multi-resolution file)\n",
+                   r->path().c_str(), r->levels());
+    if (r->luminance_chroma() && o.verbose)
+      std::fprintf(stderr, "siproject: %s: luminance-chroma, read as RGB by OpenEXR\n",
+                   r->path().c_str());
+  }
   const int C = set.channels;
   const std::vector<std::string> names = set.channel_names;
   const int alpha = set.alpha;

@@ -1,6 +1,11 @@
 #include "sis/imageio.h"
 
 #include <Imath/half.h>
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfRgbaFile.h>
+#include <OpenEXR/ImfTestFile.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <fcntl.h>
@@ -41,6 +46,13 @@ using OIIO::TypeDesc;
 
 struct ImageReader::Impl {
   std::unique_ptr<ImageInput> in;  // null once released
+  // Luminance-chroma OpenEXR files (subsampled RY, BY), which OpenImageIO
+  // refuses: read as RGB(A) through OpenEXR's RGBA interface.
+  std::unique_ptr<Imf::RgbaInputFile> yc;
+  bool yc_alpha = false;
+  std::vector<Imf::Rgba> yc_rows;
+  bool luminance_chroma = false;
+  int levels = 0, parts = 0;  // of the file (level 0 of part 0 is read)
   ImageSpec spec;
   std::string format;
   // Tiled files: the tile row last read whole (tile-row index, element
@@ -50,6 +62,19 @@ struct ImageReader::Impl {
   int cached_elem = 0;
   std::vector<unsigned char> tile_row;
 };
+
+namespace {
+// A decoder's reason, named by its kind: a file that ends early says it is
+// truncated, whatever the library's wording.
+std::string failure(const std::string& why) {
+  std::string low = why;
+  std::transform(low.begin(), low.end(), low.begin(), [](unsigned char c) { return std::tolower(c); });
+  for (const char* eof : {"end of file", "premature", "truncat", "short read"})
+    if (low.find(eof) != std::string::npos) return "truncated file (" + why + ")";
+  return why;
+}
+
+}  // namespace
 
 ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path) {
   std::error_code ec;
@@ -63,14 +88,24 @@ ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path)
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
   ::close(fd);
-  impl_->in = ImageInput::open(path);
-  if (!impl_->in) {
-    std::string why = OIIO::geterror();
-    if (why.empty()) why = "not an image OpenImageIO can read";
-    throw InputError(path + ": " + why);
+  if (fs::file_size(path, ec) == 0) throw InputError(path + ": empty file (0 bytes)");
+  if (is_luminance_chroma(path)) {
+    open_luminance_chroma();
+  } else {
+    impl_->in = ImageInput::open(path);
+    if (!impl_->in) {
+      std::string why = OIIO::geterror();
+      if (why.empty()) why = "not an image OpenImageIO can read";
+      throw InputError(path + ": " + failure(why));
+    }
+    impl_->spec = impl_->in->spec();
+    impl_->format = impl_->in->format_name();
+    // Level 0 of a multi-resolution file, part 0 of a multi-part one.
+    ImageSpec probe;
+    while (impl_->in->seek_subimage(0, impl_->levels, probe)) ++impl_->levels;
+    while (impl_->in->seek_subimage(impl_->parts, 0, probe)) ++impl_->parts;
+    impl_->in->seek_subimage(0, 0, probe);
   }
-  impl_->spec = impl_->in->spec();
-  impl_->format = impl_->in->format_name();
   const ImageSpec& s = impl_->spec;
   if (s.width < 1 || s.height < 1 || s.nchannels < 1) {
     std::ostringstream m;
@@ -88,6 +123,75 @@ void ImageReader::release() {
   if (impl_ && impl_->in) {
     impl_->in->close();
     impl_->in.reset();
+  }
+  if (impl_) impl_->yc.reset();
+}
+
+int ImageReader::levels() const { return std::max(1, impl_->levels); }
+int ImageReader::parts() const { return std::max(1, impl_->parts); }
+bool ImageReader::luminance_chroma() const { return impl_->luminance_chroma; }
+
+bool ImageReader::is_luminance_chroma(const std::string& path) {
+  try {
+    if (!Imf::isOpenExrFile(path.c_str())) return false;
+    Imf::InputFile probe(path.c_str(), 1);
+    const Imf::ChannelList& ch = probe.header().channels();
+    for (const char* name : {"RY", "BY"}) {
+      const Imf::Channel* c = ch.findChannel(name);
+      if (c && (c->xSampling != 1 || c->ySampling != 1)) return true;
+    }
+  } catch (const std::exception&) {
+  }
+  return false;
+}
+
+void ImageReader::open_luminance_chroma() {
+  try {
+    impl_->yc = std::make_unique<Imf::RgbaInputFile>(path_.c_str(), 1);
+  } catch (const std::exception& e) {
+    throw InputError(path_ + ": " + failure(e.what()));
+  }
+  const Imath::Box2i dw = impl_->yc->dataWindow(), fw = impl_->yc->displayWindow();
+  impl_->yc_alpha = (impl_->yc->channels() & Imf::WRITE_A) != 0;
+  ImageSpec s(dw.max.x - dw.min.x + 1, dw.max.y - dw.min.y + 1, impl_->yc_alpha ? 4 : 3,
+              TypeDesc::HALF);
+  s.x = dw.min.x;
+  s.y = dw.min.y;
+  s.full_x = fw.min.x;
+  s.full_y = fw.min.y;
+  s.full_width = fw.max.x - fw.min.x + 1;
+  s.full_height = fw.max.y - fw.min.y + 1;
+  s.channelnames = impl_->yc_alpha ? std::vector<std::string>{"R", "G", "B", "A"}
+                                   : std::vector<std::string>{"R", "G", "B"};
+  s.alpha_channel = impl_->yc_alpha ? 3 : -1;
+  impl_->spec = s;
+  impl_->format = "openexr";
+  impl_->luminance_chroma = true;
+}
+
+void ImageReader::read_luminance_chroma(long y0, long y1, SampleFormat format, void* rows) {
+  const ImageSpec& s = impl_->spec;
+  const long w = s.width, C = s.nchannels;
+  auto& buf = impl_->yc_rows;
+  buf.resize(std::size_t(w) * std::size_t(y1 - y0));
+  try {
+    // the frame buffer's origin at pixel (x, y) = (0, 0) of the data window
+    impl_->yc->setFrameBuffer(buf.data() - s.x - std::ptrdiff_t(s.y + y0) * w, 1, std::size_t(w));
+    impl_->yc->readPixels(int(s.y + y0), int(s.y + y1 - 1));
+  } catch (const std::exception& e) {
+    std::ostringstream m;
+    m << path_ << ": cannot read rows " << y0 << " to " << y1 - 1 << ": " << failure(e.what());
+    throw InputError(m.str());
+  }
+  for (std::size_t p = 0; p < buf.size(); ++p) {
+    const Imf::Rgba& px = buf[p];
+    const half v[4] = {px.r, px.g, px.b, px.a};
+    for (long c = 0; c < C; ++c) {
+      if (format == SampleFormat::Half)
+        static_cast<std::uint16_t*>(rows)[p * C + c] = v[c].bits();
+      else
+        static_cast<float*>(rows)[p * C + c] = float(v[c]);
+    }
   }
 }
 
@@ -149,7 +253,7 @@ namespace {
   std::string why = in.geterror();
   if (why.empty()) why = "read failed";
   std::ostringstream m;
-  m << path << ": cannot read rows " << y0 << " to " << y1 - 1 << " (truncated or corrupt?): " << why;
+  m << path << ": cannot read rows " << y0 << " to " << y1 - 1 << ": " << failure(why);
   throw InputError(m.str());
 }
 }  // namespace
@@ -163,6 +267,10 @@ void ImageReader::read(long y0, long y1, SampleFormat format, void* rows) {
     throw InputError(m.str());
   }
   if (y1 == y0) return;
+  if (impl_->luminance_chroma) {
+    if (!impl_->yc) throw std::logic_error(path_ + ": read after release()");
+    return read_luminance_chroma(y0, y1, format, rows);
+  }
   if (!impl_->in) throw std::logic_error(path_ + ": read after release()");
   // Samples stored as asked are read as stored (TypeDesc::UNKNOWN), straight
   // into `rows`: OpenImageIO 2.4 stages any call that names a type, even the

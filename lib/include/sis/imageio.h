@@ -52,6 +52,14 @@ class ImageReader {
   // Closes the file (its descriptor and decoder); the header stays readable,
   // reading then is a logic_error.
   void release();
+  // Multi-resolution and multi-part files: level 0 of part 0 is what is
+  // read; these say how many there are.
+  int levels() const;
+  int parts() const;
+  // A luminance-chroma OpenEXR file (subsampled RY, BY channels), read as
+  // half RGB(A) through OpenEXR's RGBA interface.
+  bool luminance_chroma() const;
+  static bool is_luminance_chroma(const std::string& path);
 
   const std::string& path() const { return path_; }
   long width() const;
@@ -92,6 +100,8 @@ class ImageReader {
   std::unique_ptr<Impl> impl_;
   std::string path_;
   void read(long y0, long y1, SampleFormat type, void* rows);
+  void open_luminance_chroma();
+  void read_luminance_chroma(long y0, long y1, SampleFormat format, void* rows);
 };
 
 // A strip that read_bands hands over: rows [y0, y1) of input file `file`
