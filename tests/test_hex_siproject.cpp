@@ -2,6 +2,8 @@
 // the library, the coefficient round trip, usage errors.
 #include <gtest/gtest.h>
 
+#include <OpenImageIO/imageio.h>
+
 #include <stdlib.h>
 #include <sys/wait.h>
 
@@ -130,4 +132,44 @@ TEST_F(HexSiproject, UsageErrors) {
     EXPECT_NE(r.output.find(c.says), std::string::npos) << c.args << "\n" << r.output;
     EXPECT_FALSE(fs::exists(path("out.exr"))) << c.args;
   }
+}
+
+TEST_F(HexSiproject, BandsHalfNonFiniteRemediesAndThreads) {
+  // An input of three acquisition bands (603 rows), half, with a NaN, in
+  // three row-band files: the hexagonal path gives the single file's bits at
+  // 1, 2 and 3 threads, with --nonfinite zero, --clamp local and highlight
+  // compression, and names the NaN under the error policy.
+  Image img = random_image(301, 603, 3, 31, 0, 4);
+  img.at(40, 300, 1) = NAN;
+  auto write = [&](const std::string& name, long y0, long y1) {
+    OIIO::ImageSpec spec(int(img.width), int(y1 - y0), 3, OIIO::TypeDesc::HALF);
+    spec.y = int(y0);
+    spec.full_y = 0;
+    spec.full_height = int(img.height);
+    auto out = OIIO::ImageOutput::create(path(name));
+    ASSERT_TRUE(out && out->open(path(name), spec) &&
+                out->write_image(OIIO::TypeDesc::FLOAT, img.row(y0)) && out->close());
+  };
+  write("whole.exr", 0, 603);
+  write("a.exr", 0, 250);
+  write("b.exr", 250, 400);
+  write("c.exr", 400, 603);
+  const std::string opts =
+      " --factor 3 --lattice hex --nonfinite zero --clamp local --highlight-compress -d float -q";
+  ASSERT_EQ(run(path("whole.exr") + " -o " + path("ref.exr") + opts + " --threads 1").status, 0);
+  const Image ref = read_image(path("ref.exr"));
+  for (int t : {1, 2, 3}) {
+    for (const std::string& in :
+         std::vector<std::string>{path("whole.exr"), path("c.exr") + " " + path("a.exr") + " " + path("b.exr")}) {
+      ASSERT_EQ(run(in + " -o " + path("out.exr") + opts + " --threads " + std::to_string(t)).status, 0);
+      EXPECT_EQ(read_image(path("out.exr")).data, ref.data) << t << " threads: " << in;
+    }
+  }
+  for (float v : ref.data) ASSERT_TRUE(std::isfinite(v));
+  const Result r = run(path("a.exr") + " " + path("b.exr") + " " + path("c.exr") + " -o " +
+                       path("e.exr") + " --factor 3 --lattice hex");
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_NE(r.output.find("b.exr: non-finite sample (NaN or Inf) at x 40, y 50, channel G"),
+            std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("e.exr")));
 }
