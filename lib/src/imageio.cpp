@@ -89,15 +89,18 @@ ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path)
   if (fd < 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
   ::close(fd);
   if (fs::file_size(path, ec) == 0) throw InputError(path + ": empty file (0 bytes)");
-  if (is_luminance_chroma(path)) {
-    open_luminance_chroma();
-  } else {
-    impl_->in = ImageInput::open(path);
-    if (!impl_->in) {
-      std::string why = OIIO::geterror();
+  // OpenImageIO first; a file it refuses may be a luminance-chroma OpenEXR
+  // (probed only then: a decoder made and freed before the reading raises
+  // glibc's dynamic mmap threshold, a higher peak).
+  impl_->in = ImageInput::open(path);
+  if (!impl_->in) {
+    std::string why = OIIO::geterror();
+    if (!is_luminance_chroma(path)) {
       if (why.empty()) why = "not an image OpenImageIO can read";
       throw InputError(path + ": " + failure(why));
     }
+    open_luminance_chroma();
+  } else {
     impl_->spec = impl_->in->spec();
     impl_->format = impl_->in->format_name();
     // Level 0 of a multi-resolution file, part 0 of a multi-part one.
