@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "sis/parallel.h"
 #include "sis/weights.h"
 
 namespace sis {
@@ -65,38 +66,32 @@ HexAcquisitionPlan::HexAcquisitionPlan(long input_width, long input_height, int 
   for (long e = e0; e <= e1; ++e) images_[extend_index(e, hin_, boundary)].push_back(e);
 }
 
-HexAcquisition::HexAcquisition(const HexAcquisitionPlan& plan, int threads)
+namespace {
+constexpr long kHexBandRows = 256;  // as kBandRows: the bands the files are read in
+}  // namespace
+
+HexAcquisition::HexAcquisition(const HexAcquisitionPlan& plan, int threads, long band_rows)
     : plan_(plan),
       threads_(threads < 1 ? 1 : threads),
-      acc_(plan.layout().columns, plan.layout().rows, plan.channels()) {}
+      acc_(plan.layout().columns, plan.layout().rows, plan.channels()),
+      bands_(plan.input_height(), band_rows < 1 ? kHexBandRows : band_rows),
+      row_bands_(plan.layout().rows),
+      done_(plan.layout().rows, 0),
+      ended_(bands_.count(), 0) {
+  for (long b = 0; b < bands_.count(); ++b)
+    for (long j : reached(bands_.begin(b), bands_.end(b))) row_bands_[j].push_back(b);
+}
 
-void HexAcquisition::add_rows(long y0, long y1, const float* rows) { add(y0, y1, rows); }
-void HexAcquisition::add_rows(long y0, long y1, const double* rows) { add(y0, y1, rows); }
+HexAcquisition::~HexAcquisition() = default;
 
-template <typename T>
-void HexAcquisition::add(long y0, long y1, const T* rows) {
-  if (y0 != next_row_ || y1 < y0 || y1 > plan_.input_height()) {
-    std::ostringstream m;
-    m << "HexAcquisition::add_rows(): rows [" << y0 << ", " << y1 << ") out of order (next row "
-      << next_row_ << " of " << plan_.input_height() << ")";
-    throw std::logic_error(m.str());
-  }
+std::vector<long> HexAcquisition::reached(long y0, long y1) const {
   const HexLayout& L = plan_.layout();
   const BoxSpline& B = plan_.generator();
-  const int C = plan_.channels();
-  const long win = plan_.input_width(), Q = L.columns, R = L.rows;
-  const double n = B.radius(), h = L.step(), hy = L.row_step(), dx = plan_.sample_dx(),
-               dy = plan_.sample_dy(), scale = plan_.quadrature_weight();
+  const long R = L.rows;
+  const double n = B.radius(), hy = L.row_step(), dy = plan_.sample_dy();
   const Vec2 o = L.lattice.origin();
-  const long q0 = plan_.first_column();
-  const std::vector<long>& colmap = plan_.column_source();
-  const long qlast = q0 + static_cast<long>(colmap.size()) - 1;
-
-  // Half a cell in steps and rows (cell rule), zero for the point rule.
   const bool cell = plan_.quadrature() == HexQuadrature::Cell;
-  const double ct = cell ? 0.5 * dx / h : 0.0, cv = cell ? 0.5 * dy / hy : 0.0;
-
-  // The coefficient rows this strip reaches, in increasing order.
+  const double cv = cell ? 0.5 * dy / hy : 0.0;
   std::vector<char> touched(R, 0);
   for (long k = y0; k < y1; ++k)
     for (long e : plan_.row_images(k)) {
@@ -108,27 +103,51 @@ void HexAcquisition::add(long y0, long y1, const T* rows) {
   std::vector<long> work;
   for (long j = 0; j < R; ++j)
     if (touched[j]) work.push_back(j);
+  return work;
+}
 
-  // The strip's rows extended along x by the boundary rule, in double.
+template <typename T>
+void HexAcquisition::extend(long y0, long y1, const T* rows, std::vector<double>& ext,
+                            int threads) const {
+  const int C = plan_.channels();
+  const long win = plan_.input_width();
+  const std::vector<long>& colmap = plan_.column_source();
   const long wext = static_cast<long>(colmap.size());
   const std::size_t erow = std::size_t(wext) * C;
-  strip_.resize(erow * (y1 - y0));
-  parallel_for(y1 - y0, threads_, [&](long r0, long r1) {
+  ext.resize(erow * (y1 - y0));
+  parallel_for(y1 - y0, threads, [&](long r0, long r1) {
     for (long r = r0; r < r1; ++r) {
       const T* in = rows + std::size_t(r) * win * C;
-      double* out = strip_.data() + erow * r;
+      double* out = ext.data() + erow * r;
       for (long q = 0; q < wext; ++q)
-        for (int c = 0; c < C; ++c)
-          out[std::size_t(q) * C + c] = in[std::size_t(colmap[q]) * C + c];
+        for (int c = 0; c < C; ++c) out[std::size_t(q) * C + c] = in[std::size_t(colmap[q]) * C + c];
     }
   });
+}
 
+void HexAcquisition::accumulate(const double* strip, long y0, long y1, const std::vector<long>& work,
+                                int threads) {
+  if (work.empty()) return;
+  const HexLayout& L = plan_.layout();
+  const BoxSpline& B = plan_.generator();
+  const int C = plan_.channels();
+  const long Q = L.columns;
+  const double n = B.radius(), h = L.step(), hy = L.row_step(), dx = plan_.sample_dx(),
+               dy = plan_.sample_dy(), scale = plan_.quadrature_weight();
+  const Vec2 o = L.lattice.origin();
+  const long q0 = plan_.first_column();
+  const std::vector<long>& colmap = plan_.column_source();
+  const long qlast = q0 + static_cast<long>(colmap.size()) - 1;
+  const std::size_t erow = colmap.size() * std::size_t(C);
+  // Half a cell in steps and rows (cell rule), zero for the point rule.
+  const bool cell = plan_.quadrature() == HexQuadrature::Cell;
+  const double ct = cell ? 0.5 * dx / h : 0.0, cv = cell ? 0.5 * dy / hy : 0.0;
   // Each coefficient row adds the strip's rows (and their boundary images) in
   // its support, in order; a fixed channel count lets the inner loop unroll.
   auto rows_into = [&](auto channels) {
     constexpr int CC = decltype(channels)::value;
     const int Cn = CC > 0 ? CC : C;
-    parallel_for(static_cast<long>(work.size()), threads_, [&](long w0, long w1) {
+    parallel_for(static_cast<long>(work.size()), threads, [&](long w0, long w1) {
       BoxSplineSlice s;
       BoxSplineBand band;
       const double inv_h = 1.0 / h, step = dx / h;
@@ -143,7 +162,7 @@ void HexAcquisition::add(long y0, long y1, const T* rows) {
         double* acc = acc_.row(j);
         const double yj = o.y + hy * j, xj = o.x + 0.5 * h * double(j & 1);
         for (long k = y0; k < y1; ++k) {
-          const double* ext = strip_.data() + erow * (k - y0);
+          const double* ext = strip + erow * (k - y0);
           for (long e : plan_.row_images(k)) {
             const double v = ((e + 0.5) * dy - yj) / hy;
             if (cell) {
@@ -199,11 +218,116 @@ void HexAcquisition::add(long y0, long y1, const T* rows) {
     case 4: rows_into(std::integral_constant<int, 4>()); break;
     default: rows_into(std::integral_constant<int, 0>()); break;
   }
+}
+
+void HexAcquisition::add_rows(long y0, long y1, const float* rows) { add_in_order(y0, y1, rows); }
+void HexAcquisition::add_rows(long y0, long y1, const double* rows) { add_in_order(y0, y1, rows); }
+
+template <typename T>
+void HexAcquisition::add_in_order(long y0, long y1, const T* rows) {
+  if (!in_order_) in_order_ = std::make_unique<Band>(*this, threads_);
+  if (y0 != next_row_ || y1 < y0 || y1 > plan_.input_height()) {
+    std::ostringstream m;
+    m << "HexAcquisition::add_rows(): rows [" << y0 << ", " << y1 << ") out of order (next row "
+      << next_row_ << " of " << plan_.input_height() << ")";
+    throw std::logic_error(m.str());
+  }
+  for (long y = y0; y < y1;) {
+    const long b = bands_.of(y), e = std::min(y1, bands_.end(b));
+    if (y == bands_.begin(b)) in_order_->begin(b);
+    in_order_->add(y, e, rows + std::size_t(y - y0) * plan_.input_width() * plan_.channels());
+    if (e == bands_.end(b)) in_order_->end();
+    y = e;
+  }
   next_row_ = y1;
 }
 
+void HexAcquisition::abandon() {
+  std::lock_guard<std::mutex> lock(m_);
+  abandoned_ = true;
+  cv_.notify_all();
+}
+
+HexAcquisition::Band::Band(HexAcquisition& whole, int threads)
+    : whole_(whole), threads_(threads < 1 ? 1 : threads), state_(whole.plan_.layout().rows, 0) {}
+
+HexAcquisition::Band::~Band() = default;
+
+void HexAcquisition::Band::begin(long band) {
+  if (band_ >= 0) throw std::logic_error("HexAcquisition::Band::begin(): the last band did not end");
+  if (band < 0 || band >= whole_.bands_.count() || whole_.ended_[band])
+    throw std::logic_error("HexAcquisition::Band::begin(): band " + std::to_string(band) +
+                           " is not one left to take");
+  band_ = band;
+  next_row_ = whole_.bands_.begin(band);
+}
+
+void HexAcquisition::Band::add_rows(long y0, long y1, const float* rows) { add(y0, y1, rows); }
+void HexAcquisition::Band::add_rows(long y0, long y1, const double* rows) { add(y0, y1, rows); }
+
+template <typename T>
+void HexAcquisition::Band::add(long y0, long y1, const T* rows) {
+  if (band_ < 0 || y0 != next_row_ || y1 > whole_.bands_.end(band_) || y1 < y0)
+    throw std::logic_error("HexAcquisition::Band::add_rows(): rows out of the band's order");
+  if (y1 == y0) return;
+  whole_.extend(y0, y1, rows, ext_, threads_);
+  // The coefficient rows it reaches: added to now where the earlier bands
+  // that reach them are done with them (decided at the band's first touch),
+  // else kept for end().
+  std::vector<long> now, later;
+  {
+    std::lock_guard<std::mutex> lock(whole_.m_);
+    for (long j : whole_.reached(y0, y1)) {
+      if (!state_[j]) {
+        const auto& rb = whole_.row_bands_[j];
+        const long position = long(std::find(rb.begin(), rb.end(), band_) - rb.begin());
+        state_[j] = whole_.done_[j] == position ? 1 : 2;
+        touched_.push_back(j);
+      }
+      (state_[j] == 1 ? now : later).push_back(j);
+    }
+  }
+  whole_.accumulate(ext_.data(), y0, y1, now, threads_);
+  if (!later.empty()) kept_.push_back({y0, y1, ext_, later});
+  next_row_ = y1;
+}
+
+void HexAcquisition::Band::end() {
+  if (band_ < 0 || next_row_ != whole_.bands_.end(band_))
+    throw std::logic_error("HexAcquisition::Band::end(): the band's rows are not all added");
+  // The kept rows' terms, once the earlier bands are done with their rows.
+  std::vector<long> deferred;
+  for (long j : touched_)
+    if (state_[j] == 2) deferred.push_back(j);
+  for (long j : deferred) {
+    const auto& rb = whole_.row_bands_[j];
+    const int position = int(std::find(rb.begin(), rb.end(), band_) - rb.begin());
+    {
+      std::unique_lock<std::mutex> lock(whole_.m_);
+      whole_.cv_.wait(lock, [&] { return whole_.done_[j] == position || whole_.abandoned_; });
+      if (whole_.done_[j] != position)
+        throw std::runtime_error("HexAcquisition::Band::end(): an earlier band was abandoned");
+    }
+    const std::vector<long> one{j};
+    for (const Kept& k : kept_)
+      if (std::find(k.rows.begin(), k.rows.end(), j) != k.rows.end())
+        whole_.accumulate(k.ext.data(), k.y0, k.y1, one, threads_);
+  }
+  {
+    std::lock_guard<std::mutex> lock(whole_.m_);
+    for (long j : touched_) ++whole_.done_[j];
+    whole_.ended_[band_] = 1;
+  }
+  whole_.cv_.notify_all();
+  for (long j : touched_) state_[j] = 0;
+  touched_.clear();
+  kept_.clear();
+  band_ = -1;
+}
+
 Coefficients HexAcquisition::finish() {
-  if (next_row_ != plan_.input_height()) {
+  const bool all = std::all_of(ended_.begin(), ended_.end(), [](char e) { return e != 0; });
+  if (!all && next_row_ != plan_.input_height()) {
     std::ostringstream m;
     m << "HexAcquisition::finish(): only " << next_row_ << " of " << plan_.input_height()
       << " rows were added";

@@ -25,9 +25,13 @@
 //
 // Rows stream through: each input row is read once and added to every
 // coefficient whose support holds it or one of its boundary images.
+#include <condition_variable>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
+#include "sis/bands.h"
 #include "sis/hex_lattice.h"
 
 namespace sis {
@@ -76,15 +80,63 @@ class HexAcquisitionPlan {
   std::vector<std::vector<long>> images_;
 };
 
-// Streams rows through a plan. Rows must arrive in order, each once. The
-// result does not depend on the strip sizes or the thread count.
+// Streams rows through a plan: the whole image in order (add_rows), or band
+// by band on several threads at once (Band). The result does not depend on
+// the strip sizes, the thread count or the path.
+//
+// Order of the sums: each coefficient's terms are added in increasing input
+// row k (a row's boundary images in increasing extended row), every path.
+// A coefficient row that several bands reach takes the bands' terms in band
+// order: a band that reaches it before the earlier bands are done with it
+// keeps its rows and adds their terms at its end, once they are.
 class HexAcquisition {
  public:
-  explicit HexAcquisition(const HexAcquisitionPlan& plan, int threads = 1);
-  // Rows [y0, y1) of the input, interleaved, W_in * channels per row.
+  // band_rows: input rows per band (< 1: kBandRows, as the Cartesian lattice).
+  explicit HexAcquisition(const HexAcquisitionPlan& plan, int threads = 1, long band_rows = 0);
+  ~HexAcquisition();
+  // Rows [y0, y1) of the input, interleaved, W_in * channels per row. Rows
+  // must arrive in order, each once (and not with Band).
   void add_rows(long y0, long y1, const float* rows);
   void add_rows(long y0, long y1, const double* rows);
   long next_row() const { return next_row_; }
+  const BandPartition& bands() const { return bands_; }
+
+  // Takes bands: begin(b), the band's rows in order, end(). Bands of one
+  // HexAcquisition may run at once on different threads, each taken once,
+  // bands taken in increasing order by each thread (end() may wait for an
+  // earlier band's end).
+  class Band {
+   public:
+    explicit Band(HexAcquisition& whole, int threads = 1);
+    ~Band();
+    Band(const Band&) = delete;
+    Band& operator=(const Band&) = delete;
+    void begin(long band);
+    void add_rows(long y0, long y1, const float* rows);
+    void add_rows(long y0, long y1, const double* rows);
+    void end();
+
+   private:
+    friend class HexAcquisition;
+    template <typename T>
+    void add(long y0, long y1, const T* rows);
+    HexAcquisition& whole_;
+    int threads_;
+    long band_ = -1, next_row_ = 0;
+    std::vector<long> touched_;              // coefficient rows it added to
+    std::vector<char> state_;                // per coefficient row: 0 untouched, 1 adding, 2 deferred
+    struct Kept {                            // rows kept for the deferred coefficient rows
+      long y0, y1;
+      std::vector<double> ext;               // extended along x
+      std::vector<long> rows;                // the deferred coefficient rows they reach
+    };
+    std::vector<Kept> kept_;
+    std::vector<double> ext_;                // the current strip, extended along x
+  };
+  // A band that will not end (its reading failed): bands waiting on it give
+  // up with an exception instead of waiting.
+  void abandon();
+
   // The acquired r[n] (sis/hex_lattice.h says how Coefficients records them).
   Coefficients finish();
 
@@ -93,9 +145,24 @@ class HexAcquisition {
   int threads_;
   long next_row_ = 0;
   Grid<double> acc_;
-  std::vector<double> strip_;  // the current strip, extended along x
+  BandPartition bands_;
+  // Per coefficient row: the bands that reach it, in order, and how many of
+  // them are done with it.
+  std::vector<std::vector<long>> row_bands_;
+  std::vector<int> done_;
+  std::vector<char> ended_;
+  std::mutex m_;
+  std::condition_variable cv_;
+  bool abandoned_ = false;
+  std::unique_ptr<Band> in_order_;
   template <typename T>
-  void add(long y0, long y1, const T* rows);
+  void add_in_order(long y0, long y1, const T* rows);
+  template <typename T>
+  void extend(long y0, long y1, const T* rows, std::vector<double>& ext, int threads) const;
+  // The coefficient rows rows [y0, y1) reach, in increasing order.
+  std::vector<long> reached(long y0, long y1) const;
+  // Adds the terms of the extended rows [y0, y1) to the coefficient rows js.
+  void accumulate(const double* ext, long y0, long y1, const std::vector<long>& js, int threads);
 };
 
 // Convenience: acquires a whole in-memory image.
