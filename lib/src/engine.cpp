@@ -42,70 +42,6 @@ bool all_finite(const float* v, std::size_t n) {
   return !(carry & 0x80000000u);
 }
 
-// Reads chunks 0, 1, ... in order on a thread of its own, chunk i into slot
-// i mod `slots`, once chunk i - slots (the slot's last) is released.
-class ReadAhead {
- public:
-  ReadAhead(std::size_t count, int slots, std::function<void(std::size_t, int)> read)
-      : count_(count), slots_(slots), read_(std::move(read)), thread_([this] { loop(); }) {}
-  ~ReadAhead() {
-    {
-      std::lock_guard<std::mutex> lock(m_);
-      stop_ = true;
-    }
-    cv_.notify_all();
-    thread_.join();
-  }
-  // The slot of chunk i, once read; rethrows the error of a failed read.
-  int wait(std::size_t i) {
-    std::unique_lock<std::mutex> lock(m_);
-    cv_.wait(lock, [&] { return read_count_ > i || error_; });
-    if (read_count_ <= i) std::rethrow_exception(error_);
-    return int(i % slots_);
-  }
-  // Chunk i is used: its slot may be read into again.
-  void release(std::size_t i) {
-    {
-      std::lock_guard<std::mutex> lock(m_);
-      released_ = i + 1;
-    }
-    cv_.notify_all();
-  }
-
- private:
-  void loop() {
-    for (std::size_t i = 0; i < count_; ++i) {
-      {
-        std::unique_lock<std::mutex> lock(m_);
-        cv_.wait(lock, [&] { return stop_ || i < released_ + slots_; });
-        if (stop_) return;
-      }
-      try {
-        read_(i, int(i % slots_));
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(m_);
-        error_ = std::current_exception();
-        cv_.notify_all();
-        return;
-      }
-      {
-        std::lock_guard<std::mutex> lock(m_);
-        read_count_ = i + 1;
-      }
-      cv_.notify_all();
-    }
-  }
-  const std::size_t count_;
-  const std::size_t slots_;
-  std::function<void(std::size_t, int)> read_;
-  std::mutex m_;
-  std::condition_variable cv_;
-  std::size_t read_count_ = 0, released_ = 0;
-  bool stop_ = false;
-  std::exception_ptr error_;
-  std::thread thread_;  // last: starts once the members above are ready
-};
-
 // Values [k0, k1) of a row as float in v (converted from `half_row` when
 // given, else already there): false when one is not finite.
 bool row_values(const std::uint16_t* half_row, long k0, long k1, float* v) {
@@ -345,15 +281,19 @@ void read_memory_bands(const std::vector<const Image*>& images, const std::vecto
           long s = stop.load();
           while (b < s && !stop.compare_exchange_weak(s, b)) {
           }
+          if (cb.stopped) cb.stopped(b);
           return;
         }
         cb.end(t, b);
       } catch (...) {
-        std::lock_guard<std::mutex> lock(m);
-        if (b < error_band) error_band = b, error = std::current_exception();
+        {
+          std::lock_guard<std::mutex> lock(m);
+          if (b < error_band) error_band = b, error = std::current_exception();
+        }
         long s = stop.load();
         while (b < s && !stop.compare_exchange_weak(s, b)) {
         }
+        if (cb.stopped) cb.stopped(b);
         return;
       }
     }
@@ -463,100 +403,109 @@ NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop, co
   return all;
 }
 
-// Reads and acquires the grid on the hexagonal lattice in order: strips are
-// read on a thread of their own into two slots (the next strip decodes
-// while this one is acquired), one file open at a time.
+// Reads and acquires the grid on the hexagonal lattice band by band, as
+// acquire_cartesian reads: each worker thread decodes its band's strips,
+// converts and checks them, takes their local range and adds them to a
+// band of the acquisition of its own (HexAcquisition::Band: a coefficient
+// row that two bands reach takes their terms in band order).
 NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop, const ValueHook& decode,
                                   const ValueHook& compress, HexAcquisition& hexagonal,
                                   LocalRange& local, const std::function<void(double)>& progress) {
-  struct Chunk {
-    std::size_t band;
-    long y0, y1, global;
-  };
-  std::vector<Chunk> chunks;
-  long strip = 0, g = 0;
-  for (std::size_t f = 0; f < in.bands.size(); ++f) {
-    const ProjectionInput& b = in.bands[f];
-    long rows = 0, step = 0;
-    if (b.image) {
-      rows = b.image->height;
-      step = std::min(rows, memory_strip_rows(in.width, in.channels));
-    } else {
-      for (const auto& r : in.readers)
-        if (r->path() == b.path) rows = r->height(), step = r->preferred_strip();
-    }
-    strip = std::max(strip, step);
-    for (long y = 0; y < rows; y += step) chunks.push_back({f, y, std::min(rows, y + step), g + y});
-    g += rows;
-  }
-  // Samples stored as half are read as they are and converted on the
-  // worker threads (OpenImageIO's conversion is serial and slower than
-  // decoding).
+  const BandPartition& bands = hexagonal.bands();
+  const bool memory = in.bands.front().image != nullptr;
   const bool half = in.half;
-  const std::size_t row_size = std::size_t(in.width) * in.channels;
-  const int slots = 2;
-  std::vector<Buffer<std::uint16_t>> half_rows(slots);  // unset: each strip is read into them
-  std::vector<Buffer<float>> float_rows(slots);
-  for (int b = 0; b < slots; ++b) {
-    if (half) half_rows[b].resize(strip * row_size);
-    float_rows[b].resize(strip * row_size);
+  bool exr = true;
+  std::vector<std::string> paths;
+  std::vector<const Image*> images;
+  for (const ProjectionInput& b : in.bands) {
+    paths.push_back(memory ? b.name : b.path);
+    images.push_back(b.image);
   }
-  // Per strip row: its non-finite samples (rows are checked at once on
-  // different threads).
-  std::vector<long> strip_bad(strip), strip_bad_first(strip);
-  std::unique_ptr<ImageReader> file;
-  auto read = [&](std::size_t i, int b) {
-    const Chunk& ch = chunks[i];
-    const ProjectionInput& band = in.bands[ch.band];
-    if (band.image) {
-      std::memcpy(float_rows[b].data(), band.image->row(ch.y0),
-                  std::size_t(ch.y1 - ch.y0) * row_size * sizeof(float));
-      return;
-    }
-    if (!file || file->path() != band.path) file.reset(), file = std::make_unique<ImageReader>(band.path);
-    if (half)
-      file->read_rows_half(ch.y0, ch.y1, half_rows[b].data());
-    else
-      file->read_rows(ch.y0, ch.y1, float_rows[b].data());
+  if (!memory)
+    for (const auto& r : in.readers) exr = exr && r->format_name() == "openexr";
+  const int workers = exr ? int(std::min<long>(threads, bands.count())) : 1;
+  long strip = 0;
+  if (memory) {
+    strip = memory_strip_rows(in.width, in.channels);
+  } else {
+    for (const auto& r : in.readers)
+      if (r->path() == in.bands.front().path) strip = workers > 1 ? decode_strip_rows(*r) : r->preferred_strip();
+  }
+  const std::size_t row_size = std::size_t(in.width) * in.channels;
+  const int inner = workers > 1 ? 1 : threads;  // threads within a band
+  struct Worker {
+    std::unique_ptr<HexAcquisition::Band> acquisition;
+    std::unique_ptr<LocalRange::Band> range;
+    Buffer<float> rows;
+    std::vector<long> bad, bad_first;  // per strip row
   };
-  NonFiniteReport bad;
-  ReadAhead ahead(chunks.size(), slots, read);
-  for (std::size_t i = 0; i < chunks.size(); ++i) {
-    const Chunk& ch = chunks[i];
-    const long y = ch.global, y1 = ch.global + ch.y1 - ch.y0;
-    const int b = ahead.wait(i);  // rethrows a read error
-    const long rows = y1 - y;
-    float* data = float_rows[b].data();
-    const long values = long(row_size);
-    // Non-finite samples zeroed (and counted), ...
-    parallel_for(rows, threads, [&](long r0, long r1) {
+  std::vector<std::unique_ptr<Worker>> w;
+  for (int t = 0; t < workers; ++t) {
+    w.push_back(std::make_unique<Worker>());
+    w.back()->acquisition = std::make_unique<HexAcquisition::Band>(hexagonal, inner);
+    w.back()->range = std::make_unique<LocalRange::Band>(local);
+    w.back()->bad.resize(strip);
+    w.back()->bad_first.resize(strip);
+  }
+  std::vector<NonFiniteReport> bad(bands.count());
+  std::mutex progress_mutex;
+  long rows_done = 0;
+  BandCallbacks cb;
+  cb.begin = [&](int t, long b) {
+    w[t]->acquisition->begin(b);
+    w[t]->range->begin(b);
+  };
+  cb.strip = [&](int t, const Strip& s) {
+    Worker& k = *w[t];
+    const long y = s.global, rows = s.y1 - s.y0, y1 = y + rows;
+    float* data = s.floats;
+    if (half) {
+      k.rows.resize(std::size_t(rows) * row_size);
+      data = k.rows.data();
+    }
+    // Converted, non-finite samples zeroed (and counted), ...
+    parallel_for(rows, inner, [&](long r0, long r1) {
       for (long r = r0; r < r1; ++r) {
         float* v = data + r * row_size;
-        strip_bad[r] = 0;
-        if (!row_values(half ? half_rows[b].data() + r * row_size : nullptr, 0, values, v))
-          strip_bad[r] = zero_nonfinite(v, row_size, 0, &strip_bad_first[r]);
+        k.bad[r] = 0;
+        if (!row_values(half ? s.half + r * row_size : nullptr, 0, long(row_size), v))
+          k.bad[r] = zero_nonfinite(v, row_size, 0, &k.bad_first[r]);
       }
     });
     // ... then decoded, their local range taken and highlights compressed.
-    local.open(y, y1);
-    parallel_for(values, threads, [&](long k0, long k1) {
+    k.range->open(y, y1);
+    parallel_for(long(row_size), inner, [&](long k0, long k1) {
       for (long r = 0; r < rows; ++r) {
         float* v = data + r * row_size + k0;
         if (decode) decode(v, std::size_t(k1 - k0), std::size_t(k0));
-        local.fold(y + r, k0, k1, v);
+        k.range->fold(y + r, k0, k1, v);
         if (compress) compress(v, std::size_t(k1 - k0), std::size_t(k0));
       }
     });
-    local.close(y1);
-    hexagonal.add_rows(y, y1, data);
-    const ProjectionInput& band = in.bands[ch.band];
-    add_nonfinite(bad, strip_bad, strip_bad_first, rows, ch.y0, in.channels,
-                  band.image ? band.name : band.path);
-    ahead.release(i);
-    if (bad.count && stop) break;
-    if (progress) progress(double(y1) / in.height);
+    k.range->close(y1);
+    k.acquisition->add_rows(y, y1, data);
+    NonFiniteReport& n = bad[bands.of(y)];
+    add_nonfinite(n, k.bad, k.bad_first, rows, s.y0, in.channels, *s.path);
+    return !(stop && n.count);
+  };
+  cb.end = [&](int t, long b) {
+    w[t]->acquisition->end();
+    w[t]->range->end();
+    std::lock_guard<std::mutex> lock(progress_mutex);
+    rows_done += bands.end(b) - bands.begin(b);
+    if (progress) progress(double(rows_done) / bands.rows());
+  };
+  cb.stopped = [&](long) { hexagonal.abandon(); };
+  if (memory)
+    read_memory_bands(images, paths, bands, strip, workers, cb);
+  else
+    read_bands(paths, bands, strip, workers, half, cb);
+  NonFiniteReport all;
+  for (const NonFiniteReport& n : bad) {
+    if (n.count && all.count == 0) all = n;
+    else all.count += n.count;
   }
-  return bad;
+  return all;
 }
 
 }  // namespace
@@ -659,7 +608,8 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
     const HexAcquisitionPlan plan(in.width, in.height, C, double(W), double(H), layout,
                                   rq.space.hex_order, rq.boundary, rq.space.quadrature);
     HexAcquisition hexagonal(plan, threads);
-    p.local_range = std::make_unique<LocalRange>(in.width, in.height, C, W, H);
+    p.local_range =
+        std::make_unique<LocalRange>(in.width, in.height, C, W, H, hexagonal.bands().band_rows());
     bad = acquire_hexagonal(in, threads, stop, decode, compress, hexagonal, *p.local_range,
                             rq.progress);
     if (!bad.count || !stop) k = hexagonal.finish();

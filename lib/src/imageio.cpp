@@ -435,6 +435,7 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
         }
         if (!whole) {
           stop_at(b);
+          if (cb.stopped) cb.stopped(b);
           return;
         }
         cb.end(t, b);
@@ -444,6 +445,7 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
           if (b < error_band) error_band = b, error = std::current_exception();
         }
         stop_at(b);
+        if (cb.stopped) cb.stopped(b);
         return;
       }
     }
