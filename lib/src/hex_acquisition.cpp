@@ -107,7 +107,7 @@ std::vector<long> HexAcquisition::reached(long y0, long y1) const {
 }
 
 template <typename T>
-void HexAcquisition::extend(long y0, long y1, const T* rows, std::vector<double>& ext,
+void HexAcquisition::extend(long y0, long y1, const T* rows, std::vector<T>& ext,
                             int threads) const {
   const int C = plan_.channels();
   const long win = plan_.input_width();
@@ -118,14 +118,15 @@ void HexAcquisition::extend(long y0, long y1, const T* rows, std::vector<double>
   parallel_for(y1 - y0, threads, [&](long r0, long r1) {
     for (long r = r0; r < r1; ++r) {
       const T* in = rows + std::size_t(r) * win * C;
-      double* out = ext.data() + erow * r;
+      T* out = ext.data() + erow * r;
       for (long q = 0; q < wext; ++q)
         for (int c = 0; c < C; ++c) out[std::size_t(q) * C + c] = in[std::size_t(colmap[q]) * C + c];
     }
   });
 }
 
-void HexAcquisition::accumulate(const double* strip, long y0, long y1, const std::vector<long>& work,
+template <typename S>
+void HexAcquisition::accumulate(const S* strip, long y0, long y1, const std::vector<long>& work,
                                 int threads) {
   if (work.empty()) return;
   const HexLayout& L = plan_.layout();
@@ -162,7 +163,7 @@ void HexAcquisition::accumulate(const double* strip, long y0, long y1, const std
         double* acc = acc_.row(j);
         const double yj = o.y + hy * j, xj = o.x + 0.5 * h * double(j & 1);
         for (long k = y0; k < y1; ++k) {
-          const double* ext = strip + erow * (k - y0);
+          const S* ext = strip + erow * (k - y0);
           for (long e : plan_.row_images(k)) {
             const double v = ((e + 0.5) * dy - yj) / hy;
             if (cell) {
@@ -184,7 +185,7 @@ void HexAcquisition::accumulate(const double* strip, long y0, long y1, const std
                   const double right = band.antiderivative(t, hint);
                   const double wgt = right - left;
                   left = right;
-                  const double* src = ext + std::size_t(q - q0) * Cn;
+                  const S* src = ext + std::size_t(q - q0) * Cn;
                   for (int c = 0; c < Cn; ++c) a[c] += wgt * src[c];
                 }
               }
@@ -203,7 +204,7 @@ void HexAcquisition::accumulate(const double* strip, long y0, long y1, const std
                 if (!(std::abs(t) < hw)) continue;
                 p = s.piece(t, p);
                 const double wgt = scale * s.eval_piece(p, t);
-                const double* src = ext + std::size_t(q - q0) * Cn;
+                const S* src = ext + std::size_t(q - q0) * Cn;
                 for (int c = 0; c < Cn; ++c) a[c] += wgt * src[c];
               }
             }
@@ -270,7 +271,8 @@ void HexAcquisition::Band::add(long y0, long y1, const T* rows) {
   if (band_ < 0 || y0 != next_row_ || y1 > whole_.bands_.end(band_) || y1 < y0)
     throw std::logic_error("HexAcquisition::Band::add_rows(): rows out of the band's order");
   if (y1 == y0) return;
-  whole_.extend(y0, y1, rows, ext_, threads_);
+  std::vector<T>& ext = extended<T>();
+  whole_.extend(y0, y1, rows, ext, threads_);
   // The coefficient rows it reaches: added to now where the earlier bands
   // that reach them are done with them (decided at the band's first touch),
   // else kept for end().
@@ -287,8 +289,25 @@ void HexAcquisition::Band::add(long y0, long y1, const T* rows) {
       (state_[j] == 1 ? now : later).push_back(j);
     }
   }
-  whole_.accumulate(ext_.data(), y0, y1, now, threads_);
-  if (!later.empty()) kept_.push_back({y0, y1, ext_, later});
+  whole_.accumulate(ext.data(), y0, y1, now, threads_);
+  if (!later.empty()) {
+    // only the rows that reach them (rows between that do not add nothing)
+    long a = y1, b = y0;
+    for (long k = y0; k < y1; ++k)
+      for (long j : whole_.reached(k, k + 1))
+        if (std::binary_search(later.begin(), later.end(), j)) {
+          a = std::min(a, k);
+          b = std::max(b, k + 1);
+          break;
+        }
+    const std::size_t erow = whole_.plan_.column_source().size() * std::size_t(whole_.plan_.channels());
+    Kept k{a, b, {}, {}, later};
+    if constexpr (std::is_same_v<T, float>)
+      k.ext_f.assign(ext.begin() + (a - y0) * erow, ext.begin() + (b - y0) * erow);
+    else
+      k.ext_d.assign(ext.begin() + (a - y0) * erow, ext.begin() + (b - y0) * erow);
+    if (b > a) kept_.push_back(std::move(k));
+  }
   next_row_ = y1;
 }
 
@@ -309,9 +328,13 @@ void HexAcquisition::Band::end() {
         throw std::runtime_error("HexAcquisition::Band::end(): an earlier band was abandoned");
     }
     const std::vector<long> one{j};
-    for (const Kept& k : kept_)
-      if (std::find(k.rows.begin(), k.rows.end(), j) != k.rows.end())
-        whole_.accumulate(k.ext.data(), k.y0, k.y1, one, threads_);
+    for (const Kept& k : kept_) {
+      if (std::find(k.rows.begin(), k.rows.end(), j) == k.rows.end()) continue;
+      if (!k.ext_f.empty())
+        whole_.accumulate(k.ext_f.data(), k.y0, k.y1, one, threads_);
+      else
+        whole_.accumulate(k.ext_d.data(), k.y0, k.y1, one, threads_);
+    }
   }
   {
     std::lock_guard<std::mutex> lock(whole_.m_);

@@ -29,6 +29,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "sis/bands.h"
@@ -127,11 +128,21 @@ class HexAcquisition {
     std::vector<char> state_;                // per coefficient row: 0 untouched, 1 adding, 2 deferred
     struct Kept {                            // rows kept for the deferred coefficient rows
       long y0, y1;
-      std::vector<double> ext;               // extended along x
+      std::vector<float> ext_f;              // extended along x, as they came (float
+      std::vector<double> ext_d;             // or double)
       std::vector<long> rows;                // the deferred coefficient rows they reach
     };
     std::vector<Kept> kept_;
-    std::vector<double> ext_;                // the current strip, extended along x
+    // the current strip, extended along x, in the rows' own type
+    std::vector<float> ext_f_;
+    std::vector<double> ext_d_;
+    template <typename T>
+    std::vector<T>& extended() {
+      if constexpr (std::is_same_v<T, float>)
+        return ext_f_;
+      else
+        return ext_d_;
+    }
   };
   // A band that will not end (its reading failed): bands waiting on it give
   // up with an exception instead of waiting.
@@ -158,11 +169,12 @@ class HexAcquisition {
   template <typename T>
   void add_in_order(long y0, long y1, const T* rows);
   template <typename T>
-  void extend(long y0, long y1, const T* rows, std::vector<double>& ext, int threads) const;
+  void extend(long y0, long y1, const T* rows, std::vector<T>& ext, int threads) const;
   // The coefficient rows rows [y0, y1) reach, in increasing order.
   std::vector<long> reached(long y0, long y1) const;
   // Adds the terms of the extended rows [y0, y1) to the coefficient rows js.
-  void accumulate(const double* ext, long y0, long y1, const std::vector<long>& js, int threads);
+  template <typename S>
+  void accumulate(const S* ext, long y0, long y1, const std::vector<long>& js, int threads);
 };
 
 // Convenience: acquires a whole in-memory image.
