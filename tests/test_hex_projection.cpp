@@ -11,6 +11,7 @@
 #include <random>
 
 #include "sis/hex_projection.h"
+#include "sis/space.h"
 #include "sis/projection.h"
 #include "support.h"
 

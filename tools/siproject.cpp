@@ -22,6 +22,7 @@
 #include "sis/hex_lattice.h"
 #include "sis/memory.h"
 #include "sis/projection.h"
+#include "sis/space.h"
 
 namespace fs = std::filesystem;
 using namespace sis;
@@ -160,7 +161,7 @@ int run(const Options& o) {
     }
   }();
   const Kernel generator = [&] {
-    if (hex) return hex_generator_kernel(hex_order);
+    if (hex) return Kernel::bspline(3);  // unused: the hexagonal space's generator is hex_order's
     try {
       return Kernel::parse(o.generator);
     } catch (const std::invalid_argument& e) {
@@ -177,7 +178,7 @@ int run(const Options& o) {
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
-  if (method == Method::MinError && !generator.is_bspline())
+  if (!hex && method == Method::MinError && !generator.is_bspline())
     throw UsageError("--method min-error needs a B-spline generator (box, tent, quadratic, cubic, "
                      "bspline:N), not " + generator.name() + "; use --method conventional");
   Clamp clamp;
@@ -291,13 +292,11 @@ int run(const Options& o) {
       std::cerr << "siproject: warning: replaced " << replaced.count
                 << " non-finite coefficients with 0; first: " << replaced.where << "\n";
     // its own size is its frame's (a hexagonal grid also covers a margin)
-    if (k.lattice.is_hexagonal())
-      std::tie(W, H) = out_size(std::lround(k.image_width), std::lround(k.image_height));
-    else
-      std::tie(W, H) = out_size(k.c.width, k.c.height);
+    const auto [fw, fh] = visit_space(k, [&](auto space) { return space.frame(k); });
+    std::tie(W, H) = out_size(fw, fh);
+    const double radius = visit_space(k, [&](auto space) { return space.radius(k); });
     estimate = projection_bytes(W, H, C, std::uint64_t(k.c.width) * std::uint64_t(k.c.height), false,
-                                false, threads,
-                                table_bytes(W, k.c.width, H, k.c.height, k.generator.radius()));
+                                false, threads, table_bytes(W, k.c.width, H, k.c.height, radius));
     check_memory(estimate, "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
                                std::to_string(C) + " output");
   } else {
@@ -386,7 +385,7 @@ int run(const Options& o) {
       {"sis:negative_before_clamp", std::to_string(before.negative)},
       {"sis:out_of_range_before_clamp",
        own_range ? std::to_string(before.out_of_range) : std::string("unknown")},
-      {"sis:lattice", k.lattice.is_hexagonal() ? "hexagonal" : "cartesian"},
+      {"sis:lattice", space_name(space_of(k))},
       {"sis:half_clamped", std::to_string(half_clamped)},
       {"Software", "siproject"},
   };
@@ -415,7 +414,7 @@ int run(const Options& o) {
       std::fprintf(stderr, "siproject: memory: about %s needed, %s available\n",
                    format_bytes(estimate).c_str(),
                    available_memory() == UINT64_MAX ? "no limit" : format_bytes(available_memory()).c_str());
-    if (k.lattice.is_hexagonal())
+    if (space_of(k) == SpaceKind::Hexagonal)
       std::fprintf(stderr,
                    "siproject: hexagonal lattice, %.6g points per output pixel (step %.6g), "
                    "%ld x %ld offset-row coefficients over the frame and its margin%s\n",

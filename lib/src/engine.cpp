@@ -13,10 +13,12 @@
 #include <sstream>
 #include <thread>
 
+#include "sis/box_spline.h"
 #include "sis/hex_lattice.h"
 #include "sis/memory.h"
 #include "sis/parallel.h"
 #include "sis/projection.h"
+#include "sis/space.h"
 
 namespace sis {
 
@@ -530,8 +532,8 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
     throw RequestError("--lattice hex has the min-error method only");
   if (hex && rq.prefilter != PrefilterMethod::FFT)
     throw RequestError("--lattice hex has the fft prefilter only");
-  const Kernel generator = hex ? hex_generator_kernel(rq.space.hex_order) : rq.space.generator;
-  if (rq.method == Method::MinError && !generator.is_bspline())
+  const Kernel& generator = rq.space.generator;  // the Cartesian space's
+  if (!hex && rq.method == Method::MinError && !generator.is_bspline())
     throw RequestError("--method min-error needs a B-spline generator (box, tent, quadratic, cubic, "
                        "bspline:N), not " + generator.name() + "; use --method conventional");
   std::uint64_t coefficients = std::uint64_t(W) * std::uint64_t(H);
@@ -568,7 +570,9 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
     coefficients = std::uint64_t(layout.columns) * std::uint64_t(layout.rows);
   }
   p.estimated_bytes = projection_bytes(W, H, C, coefficients, true, rq.coefficient_file, threads,
-                                       table_bytes(W, in.width, H, in.height, generator.radius()));
+                                       table_bytes(W, in.width, H, in.height,
+                                                   hex ? BoxSpline::hexagonal(rq.space.hex_order).radius()
+                                                       : generator.radius()));
   check_memory(p.estimated_bytes, "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
                                       std::to_string(C) + " output");
 

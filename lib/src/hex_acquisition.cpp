@@ -359,7 +359,7 @@ Coefficients HexAcquisition::finish() {
   Coefficients out;
   out.c = std::move(acc_);
   out.lattice = plan_.layout().lattice;
-  out.generator = hex_generator_kernel(plan_.generator().order());
+  out.box_spline = &plan_.generator();
   out.boundary = plan_.boundary();
   out.min_error = true;
   out.image_width = plan_.image_width();

@@ -73,23 +73,10 @@ HexLayout hex_layout(const Coefficients& k) {
 }
 
 const BoxSpline& hex_generator(const Coefficients& k) {
-  const int d = k.generator.is_bspline() ? k.generator.degree() : -1;
-  if (d == 1) return BoxSpline::hexagonal(1);
-  if (d == 4) return BoxSpline::hexagonal(2);
-  throw std::invalid_argument("hex_generator(): generator " + k.generator.name() +
-                              " names no box spline (degree 1: hex-hat, 4: hex-quartic)");
+  if (!k.box_spline) throw std::invalid_argument("hex_generator(): coefficients without a box spline");
+  return *k.box_spline;
 }
 
-Kernel hex_generator_kernel(int order) {
-  if (order < 1 || order > kMaxBoxSplineOrder)
-    throw std::invalid_argument("hex_generator_kernel(): order " + std::to_string(order) +
-                                " outside [1, " + std::to_string(kMaxBoxSplineOrder) + "]");
-  return Kernel::bspline(3 * order - 2);
-}
 
-std::string generator_name(const Coefficients& k) {
-  if (k.lattice.is_hexagonal()) return hex_generator(k).name();
-  return k.generator.name();
-}
 
 }  // namespace sis

@@ -31,6 +31,7 @@
 #include <sstream>
 
 #include "sis/hex_lattice.h"
+#include "sis/space.h"
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -743,25 +744,15 @@ StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
     s << v;
     return s.str();
   };
-  const Vec2 o = k.lattice.origin();
-  const auto& L = k.lattice.matrix();
-  Metadata md = {
-      {"sis:coefficients", "1"},
-      {"sis:lattice", k.lattice.separable()      ? "cartesian"
-                      : k.lattice.is_hexagonal() ? "hexagonal"
-                                                 : "general"},
-      // rows: c(i, j) at o + L (i, j); offset-rows (sis/hex_lattice.h): at
-      // o + h (i + (j mod 2)/2, (sqrt(3)/2) j), periodic on the grid
-      {"sis:storage", k.lattice.is_hexagonal() ? "offset-rows" : "rows"},
-      {"sis:lattice_origin", num(o.x) + " " + num(o.y)},
-      {"sis:lattice_matrix", num(L[0]) + " " + num(L[1]) + " " + num(L[2]) + " " + num(L[3])},
-      {"sis:generator", generator_name(k)},
-      {"sis:degree", std::to_string(k.generator.degree())},
+  // the space's own keys (lattice, storage, origin, matrix, generator, degree)
+  Metadata md = visit_space(k, [&](auto space) { return space.metadata(k); });
+  md.insert(md.begin(), {"sis:coefficients", "1"});
+  md.insert(md.end(), {
       {"sis:boundary", boundary_name(k.boundary)},
       {"sis:method", k.min_error ? "min-error" : "conventional"},
       {"sis:image_width", num(k.image_width)},
       {"sis:image_height", num(k.image_height)},
-  };
+  });
   md.insert(md.end(), extra.begin(), extra.end());
   return stage_image(path, grid, channel_names, md);
 }
@@ -794,7 +785,7 @@ Coefficients read_coefficients(ImageReader& r) {
       if (!k.lattice.is_hexagonal() || storage != "offset-rows")
         throw std::invalid_argument("sis:lattice hexagonal needs a hexagonal sis:lattice_matrix "
                                     "and sis:storage offset-rows");
-      k.generator = hex_generator_kernel(BoxSpline::parse(r.attribute("sis:generator")).order());
+      k.box_spline = &BoxSpline::hexagonal(BoxSpline::parse(r.attribute("sis:generator")).order());
     } else if (lattice == "cartesian") {
       if (!k.lattice.separable() || !(L[0] > 0) || !(L[3] > 0) || storage != "rows")
         throw std::invalid_argument("sis:lattice cartesian needs a diagonal sis:lattice_matrix of "
@@ -804,7 +795,8 @@ Coefficients read_coefficients(ImageReader& r) {
       throw std::invalid_argument("sis:lattice '" + lattice + "': expected cartesian or hexagonal");
     }
     const std::string degree = r.attribute("sis:degree");
-    if (degree != std::to_string(k.generator.degree()))
+    const int want = k.box_spline ? 3 * k.box_spline->order() - 2 : k.generator.degree();
+    if (degree != std::to_string(want))
       throw std::invalid_argument("sis:degree '" + degree + "' is not the degree of generator " +
                                   r.attribute("sis:generator"));
     k.boundary = parse_boundary(r.attribute("sis:boundary"));

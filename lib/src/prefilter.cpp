@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "fftw_planner.h"
-#include "sis/hex_prefilter.h"
+#include "sis/space.h"
 #include "sis/weights.h"
 
 namespace sis {
@@ -176,13 +176,11 @@ void PrefilterPlan::execute(Grid<double>& r, int threads) const {
 }
 
 void prefilter(Coefficients& coefficients, int threads, PrefilterMethod method) {
+  visit_space(coefficients, [&](auto space) { space.prefilter(coefficients, threads, method); });
+}
+
+void CartesianSpace::prefilter(Coefficients& coefficients, int threads, PrefilterMethod method) {
   if (!coefficients.min_error || coefficients.generator.degree() == 0) return;
-  if (coefficients.lattice.is_hexagonal()) {
-    if (method != PrefilterMethod::FFT)
-      throw std::invalid_argument("prefilter(): the hexagonal lattice has the FFT prefilter only");
-    hex_prefilter(coefficients, threads);
-    return;
-  }
   if (!coefficients.lattice.separable())
     throw std::invalid_argument("prefilter(): only separable lattices are supported");
   PrefilterPlan plan(coefficients.generator.degree(), coefficients.c.width, coefficients.c.height,

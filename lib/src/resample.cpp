@@ -7,7 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "sis/hex_resample.h"
+#include "sis/space.h"
 #include "sis/weights.h"
 
 namespace sis {
@@ -132,7 +132,17 @@ void apply_separable(const Grid<double>& c, const AxisWeights& wx, const AxisWei
 }  // namespace
 
 double evaluate(const Coefficients& k, Vec2 x, int channel) {
-  if (k.lattice.is_hexagonal()) return hex_evaluate(k, x, channel);
+  return visit_space(k, [&](auto space) { return space.evaluate(k, x, channel); });
+}
+
+Image resample(const Coefficients& k, const Display& display, long out_width, long out_height,
+               int threads) {
+  return visit_space(k, [&](auto space) {
+    return space.resample(k, display, out_width, out_height, threads);
+  });
+}
+
+double CartesianSpace::evaluate(const Coefficients& k, Vec2 x, int channel) {
   check_separable(k, "evaluate");
   const Kernel& phi = k.generator;
   const double hx = k.lattice.axis_step(0), hy = k.lattice.axis_step(1);
@@ -155,9 +165,8 @@ double evaluate(const Coefficients& k, Vec2 x, int channel) {
   return s;
 }
 
-Image resample(const Coefficients& k, const Display& display, long out_width, long out_height,
-               int threads) {
-  if (k.lattice.is_hexagonal()) return hex_resample(k, display, out_width, out_height, threads);
+Image CartesianSpace::resample(const Coefficients& k, const Display& display, long out_width,
+                              long out_height, int threads) {
   check_separable(k, "resample");
   if (out_width < 1 || out_height < 1) {
     std::ostringstream m;

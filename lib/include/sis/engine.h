@@ -20,6 +20,7 @@
 #include "sis/prefilter.h"
 #include "sis/range.h"
 #include "sis/resample.h"
+#include "sis/space.h"
 
 namespace sis {
 
@@ -74,8 +75,6 @@ struct InputSet {
 // Reads the inputs' headers (each file closed again unless few) and checks
 // that they tile one grid. Throws InputError naming the file.
 InputSet inspect(const std::vector<ProjectionInput>& inputs);
-
-enum class SpaceKind { Cartesian, Hexagonal };
 
 // The space: a lattice with a generator, from a closed set. Cartesian: the
 // tensor space of `generator` on the output pixels. Hexagonal: the

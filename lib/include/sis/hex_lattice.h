@@ -75,10 +75,6 @@ HexLayout hex_layout(const Coefficients& coefficients);
 
 // Generator of a hexagonal approximation: the box spline whose degree
 // Coefficients::generator records. Throws unless it is 1 or 4.
-const BoxSpline& hex_generator(const Coefficients& coefficients);
-// The Kernel recording the box spline of order n: Kernel::bspline(3n - 2).
-Kernel hex_generator_kernel(int order);
-// "hex-hat" / "hex-quartic" on a hexagonal lattice, the Kernel's name otherwise.
-std::string generator_name(const Coefficients& coefficients);
+const BoxSpline& hex_generator(const Coefficients& coefficients);  // its box_spline
 
 }  // namespace sis
