@@ -300,10 +300,15 @@ void read_memory_bands(const std::vector<const Image*>& images, const std::vecto
       }
     }
   };
-  std::vector<std::thread> helpers;
-  for (int t = 1; t < T; ++t) helpers.emplace_back(worker, t);
-  worker(0);
-  for (auto& h : helpers) h.join();
+  // The workers on the process's worker pool (parallel.h), one part each;
+  // their own calls to parallel_for run in them. One worker runs here, so
+  // that the stages it calls may use the pool.
+  if (T == 1)
+    worker(0);
+  else
+    parallel_for(T, T, [&](long t0, long t1) {
+      for (long t = t0; t < t1; ++t) worker(int(t));
+    });
   if (error && error_band <= stop.load()) std::rethrow_exception(error);
 }
 

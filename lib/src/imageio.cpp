@@ -31,6 +31,7 @@
 #include <sstream>
 
 #include "sis/hex_lattice.h"
+#include "sis/parallel.h"
 #include "sis/space.h"
 
 #if defined(__x86_64__)
@@ -451,10 +452,15 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
       }
     }
   };
-  std::vector<std::thread> helpers;
-  for (int t = 1; t < T; ++t) helpers.emplace_back(worker, t);
-  worker(0);
-  for (auto& h : helpers) h.join();
+  // The workers on the process's worker pool (parallel.h), one part each;
+  // their own calls to parallel_for run in them. One worker runs here, so
+  // that the stages it calls may use the pool.
+  if (T == 1)
+    worker(0);
+  else
+    parallel_for(T, T, [&](long t0, long t1) {
+      for (long t = t0; t < t1; ++t) worker(int(t));
+    });
   if (error && error_band <= stop.load()) std::rethrow_exception(error);
   return stop.load() == LONG_MAX ? -1 : stop.load();
 }
@@ -833,7 +839,7 @@ Coefficients read_coefficients(ImageReader& r) {
     r.read_rows(y, std::min(r.height(), y + r.preferred_strip()), grid.row(y));
   k.c = Grid<double>(grid.width, grid.height, grid.channels);
   for (std::size_t q = 0; q < grid.data.size(); ++q) k.c.data[q] = grid.data[q];
-  if (k.lattice.is_hexagonal()) {
+  if (space_of(k) == SpaceKind::Hexagonal) {
     try {
       hex_layout(k);
     } catch (const std::invalid_argument& e) {
