@@ -312,6 +312,57 @@ void read_memory_bands(const std::vector<const Image*>& images, const std::vecto
   if (error && error_band <= stop.load()) std::rethrow_exception(error);
 }
 
+// How the grid is read in bands: its bands' names and images, how many
+// workers (several for OpenEXR files and samples in memory, one for other
+// formats) and the strip height (a worker's own decoding: about 1 MB, in
+// its cache; OpenEXR's pool with one worker: several of its blocks).
+struct Reading {
+  bool memory = false, half = false;
+  std::vector<std::string> names;
+  std::vector<const Image*> images;
+  int workers = 1;
+  long strip = 0;
+};
+
+Reading plan_reading(const InputSet& in, int threads, const BandPartition& bands) {
+  Reading g;
+  g.memory = in.bands.front().image != nullptr;
+  g.half = in.half;
+  for (const ProjectionInput& b : in.bands) {
+    g.names.push_back(g.memory ? b.name : b.path);
+    g.images.push_back(b.image);
+  }
+  bool exr = true;
+  if (!g.memory)
+    for (const auto& r : in.readers) exr = exr && r->format_name() == "openexr";
+  g.workers = exr ? int(std::min<long>(threads, bands.count())) : 1;
+  if (g.memory) {
+    g.strip = memory_strip_rows(in.width, in.channels);
+  } else {
+    const ImageReader* first = in.readers.front().get();
+    for (const auto& r : in.readers)
+      if (r->path() == in.bands.front().path) first = r.get();
+    g.strip = g.workers > 1 ? decode_strip_rows(*first) : first->preferred_strip();
+  }
+  return g;
+}
+
+// Reads the grid as planned, then the first non-finite sample of all bands
+// and their count.
+NonFiniteReport read_grid(const Reading& g, const BandPartition& bands, const BandCallbacks& cb,
+                          const std::vector<NonFiniteReport>& bad) {
+  if (g.memory)
+    read_memory_bands(g.images, g.names, bands, g.strip, g.workers, cb);
+  else
+    read_bands(g.names, bands, g.strip, g.workers, g.half, cb);
+  NonFiniteReport all;
+  for (const NonFiniteReport& n : bad) {
+    if (n.count && all.count == 0) all = n;
+    else all.count += n.count;
+  }
+  return all;
+}
+
 // Reads and acquires the grid on the Cartesian lattice band by band: with
 // OpenEXR files (or samples in memory) each worker thread decodes its
 // band's strips and sums them while they are in its cache, into a band of
@@ -322,29 +373,10 @@ NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop, co
                                   const ValueHook& compress, Acquisition& acquisition,
                                   LocalRange& local, const BandPartition& bands,
                                   const std::function<void(double)>& progress) {
-  const bool memory = in.bands.front().image != nullptr;
-  const bool half = in.half;
-  bool exr = true;
-  std::vector<std::string> paths;
-  std::vector<const Image*> images;
-  for (const ProjectionInput& b : in.bands) {
-    paths.push_back(memory ? b.name : b.path);
-    images.push_back(b.image);
-  }
-  if (!memory)
-    for (const auto& r : in.readers) exr = exr && r->format_name() == "openexr";
-  const int workers = exr ? int(std::min<long>(threads, bands.count())) : 1;
-  // A worker's own decoding: strips of about 1 MB, in its cache; OpenEXR's
-  // pool (one worker): strips of several of its blocks, one per pool thread.
-  long strip = 0;
-  if (memory) {
-    strip = memory_strip_rows(in.width, in.channels);
-  } else {
-    const ImageReader& first = *in.readers.front();
-    for (const auto& r : in.readers)
-      if (r->path() == in.bands.front().path) strip = workers > 1 ? decode_strip_rows(*r) : r->preferred_strip();
-    if (strip == 0) strip = workers > 1 ? decode_strip_rows(first) : first.preferred_strip();
-  }
+  const Reading g = plan_reading(in, threads, bands);
+  const bool half = g.half;
+  const int workers = g.workers;
+  const long strip = g.strip;
   const std::size_t row_size = std::size_t(in.width) * in.channels;
   struct Worker {
     std::unique_ptr<Acquisition::Band> acquisition;
@@ -398,16 +430,7 @@ NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop, co
     rows_done += bands.end(b) - bands.begin(b);
     if (progress) progress(double(rows_done) / bands.rows());
   };
-  if (memory)
-    read_memory_bands(images, paths, bands, strip, workers, cb);
-  else
-    read_bands(paths, bands, strip, workers, half, cb);
-  NonFiniteReport all;
-  for (const NonFiniteReport& n : bad) {
-    if (n.count && all.count == 0) all = n;
-    else all.count += n.count;
-  }
-  return all;
+  return read_grid(g, bands, cb, bad);
 }
 
 // Reads and acquires the grid on the hexagonal lattice band by band, as
@@ -419,25 +442,10 @@ NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop, co
                                   const ValueHook& compress, HexAcquisition& hexagonal,
                                   LocalRange& local, const std::function<void(double)>& progress) {
   const BandPartition& bands = hexagonal.bands();
-  const bool memory = in.bands.front().image != nullptr;
-  const bool half = in.half;
-  bool exr = true;
-  std::vector<std::string> paths;
-  std::vector<const Image*> images;
-  for (const ProjectionInput& b : in.bands) {
-    paths.push_back(memory ? b.name : b.path);
-    images.push_back(b.image);
-  }
-  if (!memory)
-    for (const auto& r : in.readers) exr = exr && r->format_name() == "openexr";
-  const int workers = exr ? int(std::min<long>(threads, bands.count())) : 1;
-  long strip = 0;
-  if (memory) {
-    strip = memory_strip_rows(in.width, in.channels);
-  } else {
-    for (const auto& r : in.readers)
-      if (r->path() == in.bands.front().path) strip = workers > 1 ? decode_strip_rows(*r) : r->preferred_strip();
-  }
+  const Reading g = plan_reading(in, threads, bands);
+  const bool half = g.half;
+  const int workers = g.workers;
+  const long strip = g.strip;
   const std::size_t row_size = std::size_t(in.width) * in.channels;
   const int inner = workers > 1 ? 1 : threads;  // threads within a band
   struct Worker {
@@ -503,16 +511,7 @@ NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop, co
     if (progress) progress(double(rows_done) / bands.rows());
   };
   cb.stopped = [&](long) { hexagonal.abandon(); };
-  if (memory)
-    read_memory_bands(images, paths, bands, strip, workers, cb);
-  else
-    read_bands(paths, bands, strip, workers, half, cb);
-  NonFiniteReport all;
-  for (const NonFiniteReport& n : bad) {
-    if (n.count && all.count == 0) all = n;
-    else all.count += n.count;
-  }
-  return all;
+  return read_grid(g, bands, cb, bad);
 }
 
 }  // namespace
