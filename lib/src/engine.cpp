@@ -247,71 +247,6 @@ long memory_strip_rows(long width, int channels) {
   return std::clamp(16 * ((1L << 20) / row_bytes / 16), 16L, 256L);
 }
 
-// read_bands over images in memory: the same bands, strips and callbacks,
-// each strip copied into the worker's buffer first (the callbacks write
-// their values in place; the caller's samples are never changed).
-void read_memory_bands(const std::vector<const Image*>& images, const std::vector<std::string>& names,
-                       const BandPartition& bands, long strip, int workers,
-                       const BandCallbacks& cb) {
-  std::vector<long> start(1, 0);
-  for (const Image* im : images) start.push_back(start.back() + im->height);
-  const int T = int(std::clamp<long>(workers, 1, std::max(1L, bands.count())));
-  std::atomic<long> next{0}, stop{LONG_MAX};
-  std::mutex m;
-  long error_band = LONG_MAX;
-  std::exception_ptr error;
-  auto worker = [&](int t) {
-    Buffer<float> rows;
-    for (;;) {
-      const long b = next++;
-      if (b >= bands.count() || b > stop.load()) return;
-      try {
-        cb.begin(t, b);
-        bool whole = true;
-        for (long y = bands.begin(b); y < bands.end(b) && whole;) {
-          if (b > stop.load()) return;
-          const std::size_t f = std::upper_bound(start.begin(), start.end(), y) - start.begin() - 1;
-          const Image& im = *images[f];
-          const long y0 = y - start[f];
-          const long y1 = std::min({(y0 / strip + 1) * strip, bands.end(b) - start[f], im.height});
-          rows.resize(std::size_t(y1 - y0) * im.row_size());
-          std::memcpy(rows.data(), im.row(y0), rows.size() * sizeof(float));
-          whole = cb.strip(t, Strip{f, &names[f], y0, y1, y, nullptr, rows.data()});
-          y = start[f] + y1;
-        }
-        if (!whole) {
-          long s = stop.load();
-          while (b < s && !stop.compare_exchange_weak(s, b)) {
-          }
-          if (cb.stopped) cb.stopped(b);
-          return;
-        }
-        cb.end(t, b);
-      } catch (...) {
-        {
-          std::lock_guard<std::mutex> lock(m);
-          if (b < error_band) error_band = b, error = std::current_exception();
-        }
-        long s = stop.load();
-        while (b < s && !stop.compare_exchange_weak(s, b)) {
-        }
-        if (cb.stopped) cb.stopped(b);
-        return;
-      }
-    }
-  };
-  // The workers on the process's worker pool (parallel.h), one part each;
-  // their own calls to parallel_for run in them. One worker runs here, so
-  // that the stages it calls may use the pool.
-  if (T == 1)
-    worker(0);
-  else
-    parallel_for(T, T, [&](long t0, long t1) {
-      for (long t = t0; t < t1; ++t) worker(int(t));
-    });
-  if (error && error_band <= stop.load()) std::rethrow_exception(error);
-}
-
 // How the grid is read in bands: its bands' names and images, how many
 // workers (several for OpenEXR files and samples in memory, one for other
 // formats) and the strip height (a worker's own decoding: about 1 MB, in
@@ -351,10 +286,9 @@ Reading plan_reading(const InputSet& in, int threads, const BandPartition& bands
 // and their count.
 NonFiniteReport read_grid(const Reading& g, const BandPartition& bands, const BandCallbacks& cb,
                           const std::vector<NonFiniteReport>& bad) {
-  if (g.memory)
-    read_memory_bands(g.images, g.names, bands, g.strip, g.workers, cb);
-  else
-    read_bands(g.names, bands, g.strip, g.workers, g.half, cb);
+  std::vector<BandSource> sources;
+  for (std::size_t f = 0; f < g.names.size(); ++f) sources.push_back({g.names[f], g.images[f]});
+  read_bands(sources, bands, g.strip, g.workers, g.half, cb);
   NonFiniteReport all;
   for (const NonFiniteReport& n : bad) {
     if (n.count && all.count == 0) all = n;

@@ -362,7 +362,16 @@ class ExrThreadsOff {
 
 long read_bands(const std::vector<std::string>& paths, const BandPartition& bands, long strip,
                 int workers, bool half, const BandCallbacks& cb) {
+  std::vector<BandSource> sources;
+  for (const std::string& p : paths) sources.push_back({p, nullptr});
+  return read_bands(sources, bands, strip, workers, half, cb);
+}
+
+long read_bands(const std::vector<BandSource>& sources, const BandPartition& bands, long strip,
+                int workers, bool half, const BandCallbacks& cb) {
   if (strip < 1) throw std::invalid_argument("read_bands(): strip < 1");
+  std::vector<std::string> paths;  // the names strips carry
+  for (const BandSource& s : sources) paths.push_back(s.name);
   const int T = int(std::clamp<long>(workers, 1, std::max(1L, bands.count())));
   std::optional<ExrThreadsOff> off;  // for the readers opened here and by the threads
   if (T > 1) off.emplace();
@@ -374,6 +383,12 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
   // the heap: a higher peak).
   std::vector<std::unique_ptr<ImageReader>> first_readers(paths.size());
   for (std::size_t f = 0; f < paths.size(); ++f) {
+    if (const Image* im = sources[f].image) {  // samples in memory: float rows
+      if (half) throw std::logic_error(paths[f] + ": read_bands() with half on samples in memory");
+      start.push_back(start.back() + im->height);
+      values = std::max(values, std::size_t(std::min(strip, im->height)) * im->row_size());
+      continue;
+    }
     auto opened = std::make_unique<ImageReader>(paths[f]);
     const ImageReader& r = *opened;
     if (T > 1 && r.format_name() != "openexr")
@@ -424,7 +439,10 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
           // to the end of the file's strip, the band or the file
           const long y1 = std::min({(y0 / strip + 1) * strip, bands.end(b) - start[f],
                                     start[f + 1] - start[f]});
-          if (half)
+          if (const Image* im = sources[f].image)  // copied: the callbacks write in place
+            std::memcpy(float_rows.data(), im->row(y0),
+                        std::size_t(y1 - y0) * im->row_size() * sizeof(float));
+          else if (half)
             reader(f).read_rows_half(y0, y1, half_rows.data());
           else
             reader(f).read_rows(y0, y1, float_rows.data());
