@@ -443,18 +443,21 @@ int main(int argc, char** argv) {
       "shift-invariant space of B-splines (min-error), or by a conventional filter.\n"
       "IN is any image OpenImageIO reads (EXR above all), taken as point samples at\n"
       "((i + 1/2) / S, (j + 1/2) / S) output pixels; every channel is processed as it\n"
-      "is (EXR alpha is premultiplied, so it is filtered with the colour). EXR output\n"
+      "is (EXR alpha is premultiplied, so it is filtered with the colour); integer\n"
+      "inputs tagged sRGB (PNG, JPEG...) are decoded to linear first. EXR output\n"
       "keeps the input's sample type (half or float; -d), with the method in its\n"
-      "metadata; PNG, JPEG and TIFF are written 8-bit, sRGB-encoded and clamped to\n"
-      "[0, 1]. If IN is a coefficient file (--coeffs), the stored approximation is\n"
-      "evaluated instead: at its own size, --size or --factor, with any --display.\n"
-      "Exit status: 0 success, 2 usage, 3 input, 4 output.",
+      "metadata; every format but EXR, HDR, PFM and FITS is written 8-bit,\n"
+      "sRGB-encoded and clamped to [0, 1]. S < 1 upsamples (the input's cubic\n"
+      "interpolant is projected). If IN is a coefficient file (--coeffs), the stored\n"
+      "approximation is evaluated instead: at its own size, --size or --factor, with\n"
+      "any --display. Outputs replace a file only once written whole.\n"
+      "Exit status: 0 success, 1 out of memory, 2 usage, 3 input, 4 output.",
       "siproject"};
   app.add_option("IN", o.inputs,
                  "input image, or a coefficient file written by --coeffs; several inputs are row "
                  "bands of one image (by their data windows, e.g. partial renders cropped with "
                  "oiiotool --crop), projected as one")->required();
-  app.add_option("-o,--output", o.output, "output image (.exr half or float, see -d; .png/.jpg/.tif 8-bit sRGB)")->required();
+  app.add_option("-o,--output", o.output, "output image (.exr half or float, see -d; .png, .jpg, .tif... 8-bit sRGB)")->required();
   auto* fac = app.add_option("--factor", o.factor,
                              "supersampling factor per axis: output = input / S (any real S > 0; "
                              "S < 1 upsamples: the input's cubic interpolant is projected)");
