@@ -12,6 +12,7 @@
 #include <mutex>
 #include <sstream>
 #include <thread>
+#include <type_traits>
 
 #include "sis/box_spline.h"
 #include "sis/hex_lattice.h"
@@ -297,31 +298,30 @@ NonFiniteReport read_grid(const Reading& g, const BandPartition& bands, const Ba
   return all;
 }
 
-// Reads and acquires the grid on the Cartesian lattice band by band: with
-// OpenEXR files (or samples in memory) each worker thread decodes its
-// band's strips and sums them while they are in its cache, into a band of
-// the acquisition and of the local range of its own; other formats are
-// read by one thread, the sums split among the threads by columns. Stops
-// at the first band with a non-finite sample when `stop`.
-NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop, const ValueHook& decode,
-                                  const ValueHook& compress, Acquisition& acquisition,
-                                  LocalRange& local, const BandPartition& bands,
-                                  const std::function<void(double)>& progress) {
-  const Reading g = plan_reading(in, threads, bands);
-  const bool half = g.half;
-  const int workers = g.workers;
-  const long strip = g.strip;
-  const std::size_t row_size = std::size_t(in.width) * in.channels;
+// Reads the grid band by band into the lattice's acquisition (Whole:
+// Acquisition or HexAcquisition), a band of it and of the local range per
+// worker thread: each worker decodes its band's strips and uses them while
+// they are in its cache; other formats than OpenEXR are read by one worker.
+// add_strip(worker, strip, acquisition band, range band, bad, bad_first)
+// converts, checks, decodes, folds, compresses and adds a strip, counting
+// the non-finite samples of each strip row (bad) and the first's value
+// index (bad_first, the least). Stops at the first band with a non-finite
+// sample when `stop`.
+template <typename Whole, typename AddStrip>
+NonFiniteReport acquire_in_bands(const InputSet& in, const Reading& g, const BandPartition& bands,
+                                 Whole& whole, LocalRange& local, int inner, bool stop,
+                                 const std::function<void(double)>& progress,
+                                 const AddStrip& add_strip) {
   struct Worker {
-    std::unique_ptr<Acquisition::Band> acquisition;
+    std::unique_ptr<typename Whole::Band> acquisition;
     std::unique_ptr<LocalRange::Band> range;
     std::vector<std::atomic<long>> bad, bad_first;  // per strip row (pieces of a row run at once)
     explicit Worker(long rows) : bad(rows), bad_first(rows) {}
   };
   std::vector<std::unique_ptr<Worker>> w;
-  for (int t = 0; t < workers; ++t) {
-    w.push_back(std::make_unique<Worker>(strip));
-    w.back()->acquisition = std::make_unique<Acquisition::Band>(acquisition, workers > 1 ? 1 : threads);
+  for (int t = 0; t < g.workers; ++t) {
+    w.push_back(std::make_unique<Worker>(g.strip));
+    w.back()->acquisition = std::make_unique<typename Whole::Band>(whole, inner);
     w.back()->range = std::make_unique<LocalRange::Band>(local);
   }
   std::vector<NonFiniteReport> bad(bands.count());  // per band, each written by the thread taking it
@@ -337,21 +337,7 @@ NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop, co
     const long y = s.global, rows = s.y1 - s.y0, y1 = y + rows;
     for (long r = 0; r < rows; ++r) k.bad[r] = 0, k.bad_first[r] = LONG_MAX;
     k.range->open(y, y1);
-    k.acquisition->add_rows(y, y1, [&](long gy, long k0, long k1, float* scratch) {
-      const long r = gy - y;
-      float* v = half ? scratch : s.floats + r * row_size + k0;
-      if (!row_values(half ? s.half + r * row_size : nullptr, k0, k1, v)) {
-        long first_bad = -1;
-        k.bad[r] += zero_nonfinite(v, std::size_t(k1 - k0), k0, &first_bad);
-        long seen = k.bad_first[r].load();
-        while (first_bad < seen && !k.bad_first[r].compare_exchange_weak(seen, first_bad)) {
-        }
-      }
-      if (decode) decode(v, std::size_t(k1 - k0), std::size_t(k0));
-      k.range->fold(gy, k0, k1, v);
-      if (compress) compress(v, std::size_t(k1 - k0), std::size_t(k0));
-      return static_cast<const float*>(v);
-    });
+    add_strip(t, s, *k.acquisition, *k.range, k.bad, k.bad_first);
     k.range->close(y1);
     NonFiniteReport& n = bad[bands.of(y)];
     add_nonfinite(n, k.bad, k.bad_first, rows, s.y0, in.channels, *s.path);
@@ -364,88 +350,90 @@ NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop, co
     rows_done += bands.end(b) - bands.begin(b);
     if (progress) progress(double(rows_done) / bands.rows());
   };
+  if constexpr (std::is_same_v<Whole, HexAcquisition>)
+    cb.stopped = [&](long) { whole.abandon(); };  // bands waiting on it give up
   return read_grid(g, bands, cb, bad);
 }
 
-// Reads and acquires the grid on the hexagonal lattice band by band, as
-// acquire_cartesian reads: each worker thread decodes its band's strips,
-// converts and checks them, takes their local range and adds them to a
-// band of the acquisition of its own (HexAcquisition::Band: a coefficient
-// row that two bands reach takes their terms in band order).
+// The least of `seen` and `value`, kept in `seen` (pieces of a row run at once).
+void keep_least(std::atomic<long>& seen, long value) {
+  long s = seen.load();
+  while (value < s && !seen.compare_exchange_weak(s, value)) {
+  }
+}
+
+// The Cartesian lattice: each strip handed to the acquisition in pieces of
+// columns, each piece converted, checked, decoded, folded into the local
+// range and compressed on the worker threads while the sums use it.
+NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop, const ValueHook& decode,
+                                  const ValueHook& compress, Acquisition& acquisition,
+                                  LocalRange& local, const BandPartition& bands,
+                                  const std::function<void(double)>& progress) {
+  const Reading g = plan_reading(in, threads, bands);
+  const bool half = g.half;
+  const std::size_t row_size = std::size_t(in.width) * in.channels;
+  auto add_strip = [&](int, const Strip& s, Acquisition::Band& acq, LocalRange::Band& range,
+                       std::vector<std::atomic<long>>& bad, std::vector<std::atomic<long>>& bad_first) {
+    const long y = s.global, y1 = y + s.y1 - s.y0;
+    acq.add_rows(y, y1, [&](long gy, long k0, long k1, float* scratch) {
+      const long r = gy - y;
+      float* v = half ? scratch : s.floats + r * row_size + k0;
+      if (!row_values(half ? s.half + r * row_size : nullptr, k0, k1, v)) {
+        long first_bad = -1;
+        bad[r] += zero_nonfinite(v, std::size_t(k1 - k0), k0, &first_bad);
+        keep_least(bad_first[r], first_bad);
+      }
+      if (decode) decode(v, std::size_t(k1 - k0), std::size_t(k0));
+      range.fold(gy, k0, k1, v);
+      if (compress) compress(v, std::size_t(k1 - k0), std::size_t(k0));
+      return static_cast<const float*>(v);
+    });
+  };
+  return acquire_in_bands(in, g, bands, acquisition, local, g.workers > 1 ? 1 : threads, stop,
+                          progress, add_strip);
+}
+
+// The hexagonal lattice: each strip converted and checked, then decoded,
+// folded and compressed, then added whole (HexAcquisition::Band: a
+// coefficient row that two bands reach takes their terms in band order).
 NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop, const ValueHook& decode,
                                   const ValueHook& compress, HexAcquisition& hexagonal,
                                   LocalRange& local, const std::function<void(double)>& progress) {
   const BandPartition& bands = hexagonal.bands();
   const Reading g = plan_reading(in, threads, bands);
   const bool half = g.half;
-  const int workers = g.workers;
-  const long strip = g.strip;
   const std::size_t row_size = std::size_t(in.width) * in.channels;
-  const int inner = workers > 1 ? 1 : threads;  // threads within a band
-  struct Worker {
-    std::unique_ptr<HexAcquisition::Band> acquisition;
-    std::unique_ptr<LocalRange::Band> range;
-    Buffer<float> rows;
-    std::vector<long> bad, bad_first;  // per strip row
-  };
-  std::vector<std::unique_ptr<Worker>> w;
-  for (int t = 0; t < workers; ++t) {
-    w.push_back(std::make_unique<Worker>());
-    w.back()->acquisition = std::make_unique<HexAcquisition::Band>(hexagonal, inner);
-    w.back()->range = std::make_unique<LocalRange::Band>(local);
-    w.back()->bad.resize(strip);
-    w.back()->bad_first.resize(strip);
-  }
-  std::vector<NonFiniteReport> bad(bands.count());
-  std::mutex progress_mutex;
-  long rows_done = 0;
-  BandCallbacks cb;
-  cb.begin = [&](int t, long b) {
-    w[t]->acquisition->begin(b);
-    w[t]->range->begin(b);
-  };
-  cb.strip = [&](int t, const Strip& s) {
-    Worker& k = *w[t];
+  const int inner = g.workers > 1 ? 1 : threads;  // threads within a band
+  std::vector<Buffer<float>> converted(g.workers);  // per worker: a half strip as float
+  auto add_strip = [&](int t, const Strip& s, HexAcquisition::Band& acq, LocalRange::Band& range,
+                       std::vector<std::atomic<long>>& bad, std::vector<std::atomic<long>>& bad_first) {
     const long y = s.global, rows = s.y1 - s.y0, y1 = y + rows;
     float* data = s.floats;
     if (half) {
-      k.rows.resize(std::size_t(rows) * row_size);
-      data = k.rows.data();
+      converted[t].resize(std::size_t(rows) * row_size);
+      data = converted[t].data();
     }
-    // Converted, non-finite samples zeroed (and counted), ...
     parallel_for(rows, inner, [&](long r0, long r1) {
       for (long r = r0; r < r1; ++r) {
         float* v = data + r * row_size;
-        k.bad[r] = 0;
-        if (!row_values(half ? s.half + r * row_size : nullptr, 0, long(row_size), v))
-          k.bad[r] = zero_nonfinite(v, row_size, 0, &k.bad_first[r]);
+        if (!row_values(half ? s.half + r * row_size : nullptr, 0, long(row_size), v)) {
+          long first_bad = -1;
+          bad[r] = zero_nonfinite(v, row_size, 0, &first_bad);
+          bad_first[r] = first_bad;
+        }
       }
     });
-    // ... then decoded, their local range taken and highlights compressed.
-    k.range->open(y, y1);
     parallel_for(long(row_size), inner, [&](long k0, long k1) {
       for (long r = 0; r < rows; ++r) {
         float* v = data + r * row_size + k0;
         if (decode) decode(v, std::size_t(k1 - k0), std::size_t(k0));
-        k.range->fold(y + r, k0, k1, v);
+        range.fold(y + r, k0, k1, v);
         if (compress) compress(v, std::size_t(k1 - k0), std::size_t(k0));
       }
     });
-    k.range->close(y1);
-    k.acquisition->add_rows(y, y1, data);
-    NonFiniteReport& n = bad[bands.of(y)];
-    add_nonfinite(n, k.bad, k.bad_first, rows, s.y0, in.channels, *s.path);
-    return !(stop && n.count);
+    acq.add_rows(y, y1, data);
   };
-  cb.end = [&](int t, long b) {
-    w[t]->acquisition->end();
-    w[t]->range->end();
-    std::lock_guard<std::mutex> lock(progress_mutex);
-    rows_done += bands.end(b) - bands.begin(b);
-    if (progress) progress(double(rows_done) / bands.rows());
-  };
-  cb.stopped = [&](long) { hexagonal.abandon(); };
-  return read_grid(g, bands, cb, bad);
+  return acquire_in_bands(in, g, bands, hexagonal, local, inner, stop, progress, add_strip);
 }
 
 }  // namespace
