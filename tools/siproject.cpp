@@ -41,8 +41,7 @@ struct UsageError : std::runtime_error {
 // the output is the same for every count).
 constexpr int kMaxThreads = 1024;
 
-// The largest output side (OpenImageIO's image sides are int).
-constexpr long kMaxSide = 2147483647;
+constexpr long kMaxSide = kMaxOutputSide;
 
 struct Options {
   std::vector<std::string> inputs;

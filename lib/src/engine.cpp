@@ -88,8 +88,6 @@ void add_nonfinite(NonFiniteReport& n, const Counts& count, const Counts& first,
 // dynamic mmap threshold, and the reading's buffers then stay on the heap.
 constexpr std::size_t kKeptOpen = 64;
 
-// The largest output side (OpenImageIO's image sides are int).
-constexpr long kMaxSide = 2147483647;
 
 // Channel names of samples in memory: Y; R, G, B; R, G, B, A; else c0, c1...
 std::vector<std::string> default_names(int channels) {
@@ -446,9 +444,9 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
     throw RequestError(in.bands.front().path +
                        " is a coefficient file: it is evaluated (load_coefficients), not projected");
   const long W = rq.width, H = rq.height;
-  if (W < 1 || H < 1 || W > kMaxSide || H > kMaxSide) {
+  if (W < 1 || H < 1 || W > kMaxOutputSide || H > kMaxOutputSide) {
     std::ostringstream m;
-    m << "an output of " << W << " x " << H << " pixels: each side from 1 to " << kMaxSide;
+    m << "an output of " << W << " x " << H << " pixels: each side from 1 to " << kMaxOutputSide;
     throw RequestError(m.str());
   }
   const int threads = std::max(1, rq.threads);

@@ -24,6 +24,9 @@
 
 namespace sis {
 
+// The largest output side (OpenImageIO's image sides are int).
+inline constexpr long kMaxOutputSide = 2147483647;
+
 // A request the engine cannot carry out as asked. The message names the
 // request's field by siproject's option and the problem.
 struct RequestError : std::invalid_argument {
