@@ -68,6 +68,39 @@ HexAcquisitionPlan::HexAcquisitionPlan(long input_width, long input_height, int 
 
 namespace {
 constexpr long kHexBandRows = 256;  // as kBandRows: the bands the files are read in
+
+// The point rule along one sample row for one coefficient: a[c] += scale *
+// s(t) * src[q][c] for its m samples at t = t0, t0 + step, ... (t by repeated
+// addition), those outside the slice's support skipped. The slice's degree
+// (3 order - 2) and the channel count (CC, 0 = C at run time) are fixed at
+// compile time; t only grows, so the piece is found by stepping forward.
+template <int Order, int CC, typename S>
+void slice_terms(const BoxSplineSlice& s, double t, double step, double scale, long m,
+                 const S* src, double* a, int C) {
+  constexpr int D = 3 * Order - 2;
+  const int Cn = CC > 0 ? CC : C;
+  const double hw = s.half_width;
+  double sum[CC > 0 ? CC : 1];
+  if constexpr (CC > 0)
+    for (int c = 0; c < CC; ++c) sum[c] = a[c];
+  int p = 0;
+  for (long q = 0; q < m; ++q, t += step, src += Cn) {
+    if (!(std::abs(t) < hw)) continue;
+    while (p + 1 < s.pieces && t >= s.lo[p + 1]) ++p;
+    const double w = t - s.shift[p];
+    const auto& k = s.coef[p];
+    double y = k[D];
+    for (int d = D - 1; d >= 0; --d) y = y * w + k[d];
+    const double wgt = scale * y;
+    if constexpr (CC > 0) {
+      for (int c = 0; c < CC; ++c) sum[c] += wgt * src[c];
+    } else {
+      for (int c = 0; c < Cn; ++c) a[c] += wgt * src[c];
+    }
+  }
+  if constexpr (CC > 0)
+    for (int c = 0; c < CC; ++c) a[c] = sum[c];
+}
 }  // namespace
 
 HexAcquisition::HexAcquisition(const HexAcquisitionPlan& plan, int threads, long band_rows)
@@ -193,20 +226,19 @@ void HexAcquisition::accumulate(const S* strip, long y0, long y1, const std::vec
             }
             if (!(std::abs(v) < n)) continue;
             B.slice(v, s);
-            const double reach = s.half_width * h, hw = s.half_width;
+            const double reach = s.half_width * h;
             for (long i = 0; i < Q; ++i) {
               const double xn = xj + h * i;
               const auto [qa, qb] = columns(xn, reach);
+              const double t0 = ((qa + 0.5) * dx - xn) * inv_h;
               double* a = acc + std::size_t(i) * Cn;
-              double t = ((qa + 0.5) * dx - xn) * inv_h;
-              int p = 0;
-              for (long q = qa; q <= qb; ++q, t += step) {
-                if (!(std::abs(t) < hw)) continue;
-                p = s.piece(t, p);
-                const double wgt = scale * s.eval_piece(p, t);
-                const S* src = ext + std::size_t(q - q0) * Cn;
-                for (int c = 0; c < Cn; ++c) a[c] += wgt * src[c];
-              }
+              const S* src = ext + std::size_t(qa - q0) * Cn;
+              const long m = qb - qa + 1;
+              if (m < 1) continue;
+              if (B.order() == 1)
+                slice_terms<1, CC>(s, t0, step, scale, m, src, a, Cn);
+              else
+                slice_terms<kMaxBoxSplineOrder, CC>(s, t0, step, scale, m, src, a, Cn);
             }
           }
         }
