@@ -22,6 +22,7 @@
 #include "sis/hex_lattice.h"
 #include "sis/memory.h"
 #include "sis/projection.h"
+#include "sis/settings.h"
 #include "sis/space.h"
 
 namespace fs = std::filesystem;
@@ -37,29 +38,14 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// More worker threads than this are refused (each has a stack and buffers;
-// the output is the same for every count).
-constexpr int kMaxThreads = 1024;
-
-constexpr long kMaxSide = kMaxOutputSide;
-
+// The projection's settings (sis/settings.h, shared with the Python module)
+// and what is the tool's own: the files, the output's sample type, messages.
 struct Options {
+  Settings settings;
   std::vector<std::string> inputs;
   std::string output, coeffs;
-  double factor = 0;
-  std::string size;
-  std::string generator = "cubic", method = "min-error", display, boundary = "mirror";
-  std::string nonfinite = "error", prefilter = "fft", clamp = "none";
   std::string data_format;  // "": the input's
-  bool highlight_compress = false;
-  std::string lattice = "cartesian", quadrature = "point";
-  double density = 1.0;
-  bool factor_given = false;
-  std::string factor_spelling, density_spelling = "1";
-  bool lattice_given = false, density_given = false, quadrature_given = false;
-  int threads = 0;
   bool verbose = false, quiet = false;
-  bool generator_given = false, method_given = false, boundary_given = false;
 };
 
 using Clock = std::chrono::steady_clock;
@@ -97,18 +83,6 @@ class Progress {
   bool shown_ = false;
 };
 
-// "WxH" with positive integers.
-std::pair<long, long> parse_size(const std::string& s) {
-  long w = 0, h = 0;
-  char x = 0, extra = 0;
-  std::istringstream in(s);
-  if (!(in >> w >> x >> h) || (x != 'x' && x != 'X') || (in >> extra) || w < 1 || h < 1)
-    throw UsageError("--size '" + s + "': expected WxH with positive whole numbers, e.g. 1000x750");
-  if (w > kMaxSide || h > kMaxSide)
-    throw UsageError("--size '" + s + "': more than " + std::to_string(kMaxSide) + " pixels per side");
-  return {w, h};
-}
-
 // True when a and b name one file: the same path however spelt (relative or
 // absolute, through links or "..", existing or not), or two names of one
 // existing file (hard links).
@@ -124,75 +98,10 @@ bool same_file(const std::string& a, const std::string& b) {
 
 int run(const Options& o) {
   const auto t_start = Clock::now();
-  const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
   if (o.verbose && o.quiet) throw UsageError("-v and -q exclude each other");
-  if (o.threads < 0) throw UsageError("--threads " + std::to_string(o.threads) + ": expected 0 (all cores) or more");
-  if (o.threads > kMaxThreads)
-    throw UsageError("--threads " + std::to_string(o.threads) + ": at most " +
-                     std::to_string(kMaxThreads));
-  if (o.factor_given && !(std::isfinite(o.factor) && o.factor > 0))
-    throw UsageError("--factor " + o.factor_spelling + ": expected a finite number above 0");
-  if (!(std::isfinite(o.density) && o.density > 0))
-    throw UsageError("--density " + o.density_spelling + ": expected a finite number above 0");
-  if (o.factor_given && !o.size.empty()) throw UsageError("give --factor or --size, not both");
-  std::pair<long, long> size{0, 0};
-  if (!o.size.empty()) size = parse_size(o.size);
-  const bool hex = o.lattice == "hex";
-  if (!hex && o.lattice != "cartesian")
-    throw UsageError("--lattice '" + o.lattice + "': expected cartesian or hex");
-  if (!hex && o.density_given) throw UsageError("--density applies to --lattice hex only");
-  if (!hex && o.quadrature_given)
-    throw UsageError("--quadrature applies to --lattice hex only");
-  HexQuadrature quadrature;
-  try {
-    quadrature = parse_hex_quadrature(o.quadrature);
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(std::string("--quadrature: ") + e.what());
-  }
-  if (!hex && o.generator.rfind("hex-", 0) == 0)
-    throw UsageError("--generator " + o.generator + " needs --lattice hex");
-  const int hex_order = [&] {
-    if (!hex) return 0;
-    try {
-      return BoxSpline::parse(o.generator_given ? o.generator : "hex-quartic").order();
-    } catch (const std::invalid_argument& e) {
-      throw UsageError(std::string("--lattice hex: ") + e.what());
-    }
-  }();
-  const Kernel generator = [&] {
-    if (hex) return Kernel::bspline(3);  // unused: the hexagonal space's generator is hex_order's
-    try {
-      return Kernel::parse(o.generator);
-    } catch (const std::invalid_argument& e) {
-      throw UsageError(std::string("--generator: ") + e.what());
-    }
-  }();
-  Method method;
-  Boundary boundary;
-  std::optional<Display> display;
-  try {
-    method = parse_method(o.method);
-    boundary = parse_boundary(o.boundary);
-    if (!o.display.empty()) display = Display::parse(o.display);
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(e.what());
-  }
-  if (!hex && method == Method::MinError && !generator.is_bspline())
-    throw UsageError("--method min-error needs a B-spline generator (box, tent, quadratic, cubic, "
-                     "bspline:N), not " + generator.name() + "; use --method conventional");
-  Clamp clamp;
-  try {
-    clamp = parse_clamp(o.clamp);
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(std::string("--clamp: ") + e.what());
-  }
-  if (o.nonfinite != "error" && o.nonfinite != "zero")
-    throw UsageError("--nonfinite '" + o.nonfinite + "': expected error or zero");
-  if (o.prefilter != "fft" && o.prefilter != "recursive")
-    throw UsageError("--prefilter '" + o.prefilter + "': expected fft or recursive");
-  if (hex && method != Method::MinError)
-    throw UsageError("--lattice hex has the min-error method only");
-  if (hex && o.prefilter != "fft") throw UsageError("--lattice hex has the fft prefilter only");
+  const Settings& st = o.settings;
+  const Resolved r = resolve(st);
+  const int threads = r.threads;
   for (const std::string& in : o.inputs) {
     if (same_file(in, o.output)) throw UsageError("-o " + o.output + " is the input file");
     if (!o.coeffs.empty() && same_file(in, o.coeffs))
@@ -236,112 +145,31 @@ int run(const Options& o) {
   }
   const int C = set.channels;
   const std::vector<std::string> names = set.channel_names;
-  const int alpha = set.alpha;
   const std::string input_label = set.label;
   const long win = set.width, hin = set.height;
-  const ImageReader& reader = *set.readers.front();
-  auto out_size = [&](long w, long h) -> std::pair<long, long> {
-    if (size.first) return size;
-    if (!o.factor_given) return {w, h};
-    const double dw = std::round(w / o.factor), dh = std::round(h / o.factor);
-    if (!(dw <= kMaxSide && dh <= kMaxSide)) {
-      std::ostringstream m;
-      m << "--factor " << o.factor_spelling << ": the output would be " << dw << " x " << dh
-        << " pixels, more than " << kMaxSide << " per side";
-      throw UsageError(m.str());
-    }
-    const long ow = long(dw), oh = long(dh);
-    if (ow < 1 || oh < 1) {
-      std::ostringstream m;
-      m << "--factor " << o.factor << " is larger than the image (" << w << " x " << h << ")";
-      throw UsageError(m.str());
-    }
-    return {ow, oh};
-  };
 
+  FormRequest fr;
+  fr.keep_coefficients = !o.coeffs.empty();
+  fr.coefficient_file = !o.coeffs.empty();
+  Progress progress(!o.quiet && !set.coefficient_file, "reading and acquiring");
+  fr.progress = [&](double f) { progress.update(f); };
+  Formed f = form(st, r, std::move(set), fr);
+  for (const std::string& w : f.warnings)
+    if (!o.quiet) std::cerr << "siproject: warning: " << w << "\n";
+  Coefficients& k = f.coefficients;
+  const long W = f.width, H = f.height;
+  const bool compressed = f.highlight_compressed, srgb = f.inputs.srgb;
+  const bool input_half = f.input_half;
+  const Clamp clamp = r.clamp;
   // Output samples as the input's (oiiotool's habit): half when every input
   // stores half, float otherwise; a coefficient file records its input's.
-  const bool input_half =
-      set.coefficient_file ? reader.attribute("sis:input_format") == "half" : set.half;
   SampleFormat out_format = input_half ? SampleFormat::Half : SampleFormat::Float;
   if (data_format) out_format = *data_format;
-  Coefficients k;
-  double t_acquire = 0, t_prefilter = 0;
-  long W, H;
-  bool compressed = o.highlight_compress, srgb = false;
-  std::uint64_t estimate = 0;
-  std::unique_ptr<LocalRange> local;
-  if (set.coefficient_file) {
-    if (set.bands.size() > 1) throw UsageError("a coefficient file is evaluated alone, not with other inputs");
-    if (o.generator_given || o.method_given || o.boundary_given || o.highlight_compress)
-      throw UsageError(reader.path() + " is a coefficient file: its generator, method, boundary and "
-                       "highlight compression are recorded in it; drop --generator, --method, "
-                       "--boundary and --highlight-compress");
-    if (clamp == Clamp::Local)
-      throw UsageError("--clamp local needs the input samples; " + reader.path() + " is a coefficient file");
-    if (o.lattice_given || o.density_given || o.quadrature_given)
-      throw UsageError(reader.path() + " is a coefficient file: its lattice is recorded in it; "
-                       "drop --lattice, --density and --quadrature");
-    const auto t = Clock::now();
-    NonFiniteReport replaced;
-    k = load_coefficients(reader.path(), o.nonfinite == "zero", &replaced);
-    compressed = reader.attribute("sis:highlight_compress") == "1";
-    t_acquire = seconds_since(t);
-    if (replaced.count && !o.quiet)
-      std::cerr << "siproject: warning: replaced " << replaced.count
-                << " non-finite coefficients with 0; first: " << replaced.where << "\n";
-    // its own size is its frame's (a hexagonal grid also covers a margin)
-    const auto [fw, fh] = visit_space(k, [&](auto space) { return space.frame(k); });
-    std::tie(W, H) = out_size(fw, fh);
-    const double radius = visit_space(k, [&](auto space) { return space.radius(k); });
-    estimate = projection_bytes(W, H, C, std::uint64_t(k.c.width) * std::uint64_t(k.c.height), false,
-                                false, threads, table_bytes(W, k.c.width, H, k.c.height, radius));
-    check_memory(estimate, "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
-                               std::to_string(C) + " output");
-  } else {
-    if (!o.factor_given && !size.first)
-      throw UsageError("give the output size: --factor S (output = input / S) or --size WxH");
-    std::tie(W, H) = out_size(set.width, set.height);
-    ProjectionRequest rq;
-    rq.width = W;
-    rq.height = H;
-    if (hex) {
-      rq.space.kind = SpaceKind::Hexagonal;
-      rq.space.hex_order = hex_order;
-      rq.space.density = o.density;
-      rq.space.quadrature = quadrature;
-    } else {
-      rq.space.generator = generator;
-    }
-    rq.method = method;
-    rq.boundary = boundary;
-    rq.prefilter = o.prefilter == "fft" ? PrefilterMethod::FFT : PrefilterMethod::Recursive;
-    rq.zero_nonfinite = o.nonfinite == "zero";
-    rq.highlight_compress = o.highlight_compress;
-    rq.threads = threads;
-    rq.coefficient_file = !o.coeffs.empty();
-    srgb = set.srgb;
-    Progress progress(!o.quiet, "reading and acquiring");
-    rq.progress = [&](double f) { progress.update(f); };
-    Projection p = project(rq, std::move(set));
-    if (p.nonfinite.count && !o.quiet)
-      std::cerr << "siproject: warning: replaced " << p.nonfinite.count
-                << " non-finite samples with 0; first: " << p.nonfinite.where << "\n";
-    k = std::move(p.coefficients);
-    local = std::move(p.local_range);
-    t_acquire = p.acquire_seconds;
-    t_prefilter = p.prefilter_seconds;
-    estimate = p.estimated_bytes;
-  }
-
-  const Display shown = display ? *display : (k.min_error ? Display::antialiased_2x2() : Display::centred());
-  auto t = Clock::now();
-  FinalImage final =
-      final_image(k, shown, W, H, compressed, clamp, local.get(), threads, input_label, names, alpha);
-  Image& image = final.image;
-  const bool own_range = final.own_range;
-  const RangeReport before = final.before;
-  RangeReport after = final.after;
+  const Display& shown = f.display;
+  Image& image = f.final.image;
+  const bool own_range = f.final.own_range;
+  const RangeReport before = f.final.before;
+  RangeReport after = f.final.after;
   // Half holds magnitudes up to 65504; beyond, a half file would hold
   // infinities. By default such an output is written as float instead; with
   // -d half the samples are clamped there, and both are said.
@@ -366,9 +194,9 @@ int run(const Options& o) {
                      half_clamped);
     }
   }
-  const double t_resample = seconds_since(t);
-  const bool from_samples = local != nullptr;
-  local.reset();  // what is no longer needed goes before the output is written
+  const double t_resample = f.resample_seconds;
+  const bool from_samples = !f.from_coefficient_file;
+  f.local_range.reset();  // what is no longer needed goes before the output is written
 
   const Metadata md = {
       {"sis:method", k.min_error ? "min-error" : "conventional"},
@@ -388,7 +216,7 @@ int run(const Options& o) {
       {"sis:half_clamped", std::to_string(half_clamped)},
       {"Software", "siproject"},
   };
-  t = Clock::now();
+  const auto t = Clock::now();
   // Both outputs are written whole before either replaces a file.
   std::optional<StagedFile> coeffs_file;
   if (!o.coeffs.empty())
@@ -397,7 +225,7 @@ int run(const Options& o) {
                                             {"sis:input_format", input_half ? "half" : "float"},
                                             {"sis:highlight_compress", compressed ? "1" : "0"}}));
   Buffer<double>().swap(k.c.data);
-  StagedFile output_file = stage_image(o.output, image, names, md, alpha, out_format);
+  StagedFile output_file = stage_image(o.output, image, names, md, f.inputs.alpha, out_format);
   if (coeffs_file) coeffs_file->commit();
   output_file.commit();
   const double t_write = seconds_since(t);
@@ -408,10 +236,11 @@ int run(const Options& o) {
                  "total %.3f s\n",
                  win, hin, C, W, H, k.min_error ? "min-error" : "conventional",
                  generator_name(k).c_str(), shown.name().c_str(), boundary_name(k.boundary).c_str(),
-                 threads, t_acquire, t_prefilter, t_resample, t_write, seconds_since(t_start));
-    if (estimate)
+                 threads, f.acquire_seconds, f.prefilter_seconds, t_resample, t_write,
+                 seconds_since(t_start));
+    if (f.estimated_bytes)
       std::fprintf(stderr, "siproject: memory: about %s needed, %s available\n",
-                   format_bytes(estimate).c_str(),
+                   format_bytes(f.estimated_bytes).c_str(),
                    available_memory() == UINT64_MAX ? "no limit" : format_bytes(available_memory()).c_str());
     if (space_of(k) == SpaceKind::Hexagonal)
       std::fprintf(stderr,
@@ -419,7 +248,7 @@ int run(const Options& o) {
                    "%ld x %ld offset-row coefficients over the frame and its margin%s\n",
                    1.0 / std::abs(k.lattice.determinant()), k.lattice.matrix()[0], k.c.width,
                    k.c.height,
-                   from_samples ? (", " + hex_quadrature_name(quadrature) + " quadrature").c_str() : "");
+                   from_samples ? (", " + hex_quadrature_name(r.space.quadrature) + " quadrature").c_str() : "");
     std::fprintf(stderr, "siproject: output range [%g, %g], %ld negative samples", before.min,
                  before.max, before.negative);
     if (own_range)
@@ -457,73 +286,70 @@ int main(int argc, char** argv) {
                  "bands of one image (by their data windows, e.g. partial renders cropped with "
                  "oiiotool --crop), projected as one")->required();
   app.add_option("-o,--output", o.output, "output image (.exr half or float, see -d; .png, .jpg, .tif... 8-bit sRGB)")->required();
-  auto* fac = app.add_option("--factor", o.factor,
+  double factor = 0;
+  auto* fac = app.add_option("--factor", factor,
                              "supersampling factor per axis: output = input / S (any real S > 0; "
                              "S < 1 upsamples: the input's cubic interpolant is projected)");
-  app.add_option("--size", o.size, "output size WxH (any ratio to the input)");
-  auto* g = app.add_option("--generator", o.generator,
+  app.add_option("--size", o.settings.size, "output size WxH (any ratio to the input)");
+  auto* g = app.add_option("--generator", o.settings.generator,
                            "box, tent, quadratic, cubic, bspline:N (N = 0..7), mitchell, gaussian, "
                            "catmull-rom, lanczos3; with --lattice hex: hex-hat or hex-quartic "
                            "(the default there)")->capture_default_str();
-  auto* lat = app.add_option("--lattice", o.lattice,
+  auto* lat = app.add_option("--lattice", o.settings.lattice,
                              "cartesian (coefficients on the output pixels) or hex (a hexagonal "
                              "lattice, min-error, resampled to the output pixels)")
                   ->capture_default_str();
-  auto* quad = app.add_option("--quadrature", o.quadrature,
+  auto* quad = app.add_option("--quadrature", o.settings.quadrature,
                               "--lattice hex: the inner products from the samples: point (each "
                               "sample a point, as on the Cartesian lattice) or cell (each sample "
                               "the value over its cell: flat areas exact at any sampling, a "
                               "slight blur; better with hex-hat)")
                    ->capture_default_str();
-  auto* dens = app.add_option("--density", o.density,
+  auto* dens = app.add_option("--density", o.settings.density,
                               "--lattice hex: lattice points per output pixel (at most one "
                               "per input sample)")
                    ->capture_default_str();
-  auto* m = app.add_option("--method", o.method,
+  auto* m = app.add_option("--method", o.settings.method,
                            "min-error (orthogonal projection, B-spline generators) or conventional "
                            "(normalised weighted average, any generator)")->capture_default_str();
-  app.add_option("--display", o.display,
+  app.add_option("--display", o.settings.display,
                  "how the continuous approximation is sampled: centred, 2x2 (off-centre "
                  "antialiasing at +-1/4), pixel (exact pixel average) or offsets:DX,DY;DX,DY;... "
                  "[default: 2x2 for min-error, centred (the filtered pixels) for conventional]");
-  auto* b = app.add_option("--boundary", o.boundary,
+  auto* b = app.add_option("--boundary", o.settings.boundary,
                            "mirror (half-sample symmetric) or periodic")->capture_default_str();
   app.add_option("--coeffs", o.coeffs, "also write the coefficients as a float EXR with their metadata");
   app.add_option("-d,--data-format", o.data_format,
                  "sample type of an EXR (or other float) output: half or float [default: the "
                  "input's, as oiiotool does: half when the input stores half, float where the "
                  "output passes half's largest value 65504; -d half clamps there instead]");
-  app.add_option("--nonfinite", o.nonfinite,
+  app.add_option("--nonfinite", o.settings.nonfinite,
                  "NaN/Inf samples: error, or zero to replace them with 0")->capture_default_str();
-  app.add_flag("--highlight-compress", o.highlight_compress,
+  app.add_flag("--highlight-compress", o.settings.highlight_compress,
                "compress the samples' range with OpenImageIO's log curve (identity below 0.18) "
                "before projecting, expand after: far less HDR ringing, at a cost in energy");
-  app.add_option("--clamp", o.clamp,
+  app.add_option("--clamp", o.settings.clamp,
                  "clamp displayed samples: none, zero (at 0), local (to the min/max of the input "
                  "samples under each output pixel)")->capture_default_str();
-  app.add_option("--prefilter", o.prefilter, "fft or recursive (same result to rounding)")->capture_default_str();
-  app.add_option("--threads", o.threads, "worker threads (0: all cores); output is bit-identical for any N")
+  app.add_option("--prefilter", o.settings.prefilter, "fft or recursive (same result to rounding)")->capture_default_str();
+  app.add_option("--threads", o.settings.threads, "worker threads (0: all cores); output is bit-identical for any N")
       ->capture_default_str();
   app.add_flag("-v,--verbose", o.verbose, "print sizes and the time of each stage");
   app.add_flag("-q,--quiet", o.quiet, "print nothing but errors");
   if (const auto code = sis::cli::parse(app, argc, argv)) return *code;
   remove_staged_files_on_signals();
-  o.generator_given = g->count() > 0;
-  o.method_given = m->count() > 0;
-  o.boundary_given = b->count() > 0;
-  o.lattice_given = lat->count() > 0;
-  o.density_given = dens->count() > 0;
-  o.factor_given = fac->count() > 0;
-  if (o.factor_given) o.factor_spelling = fac->as<std::string>();
-  if (o.density_given) o.density_spelling = dens->as<std::string>();
-  o.quadrature_given = quad->count() > 0;
-  // A conventional filter named alone means the conventional method.
-  if (o.generator_given && !o.method_given) {
-    try {
-      if (!Kernel::parse(o.generator).is_bspline()) o.method = "conventional";
-    } catch (const std::invalid_argument&) {  // reported by run()
-    }
+  Settings& st = o.settings;
+  st.generator_given = g->count() > 0;
+  st.method_given = m->count() > 0;
+  st.boundary_given = b->count() > 0;
+  st.lattice_given = lat->count() > 0;
+  st.density_given = dens->count() > 0;
+  st.quadrature_given = quad->count() > 0;
+  if (fac->count() > 0) {
+    st.factor = factor;
+    st.factor_spelling = fac->as<std::string>();
   }
+  if (st.density_given) st.density_spelling = dens->as<std::string>();
   try {
     return run(o);
   } catch (const UsageError& e) {

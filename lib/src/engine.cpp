@@ -170,13 +170,13 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs) {
   std::vector<Header> h;
   for (const ProjectionInput& in : inputs) {
     if (in.image) {
-      const Image& im = *in.image;
+      const SampleView& im = in.image;
       if (im.width < 1 || im.height < 1 || im.channels < 1)
         throw InputError(in.name + ": empty image");
       const long full = in.rows > 0 ? in.rows : in.row + im.height;
       h.push_back({&in, im.width, im.height, 0, 0, im.width, full, 0, in.row, im.channels, -1,
                    in.channel_names.empty() ? default_names(im.channels) : in.channel_names,
-                   false, false, false, in.name});
+                   im.half, false, false, in.name});
       continue;
     }
     auto reader = std::make_shared<ImageReader>(in.path);
@@ -229,6 +229,11 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs) {
                      std::to_string(first.full_h) + " rows");
   }
   set.half = std::all_of(h.begin(), h.end(), [](const Header& b) { return b.half; });
+  // the bands are read as one type: half samples in memory only with half everywhere
+  for (const Header& b : h)
+    if (b.input->image && b.half && !set.half)
+      throw RequestError(b.path + ": half samples in memory with bands that are not half; "
+                         "give every band as half or every band as float");
   set.srgb = std::all_of(h.begin(), h.end(), [](const Header& b) { return b.srgb; });
   set.label = (first.input->image ? first.path : fs::path(first.path).filename().string()) +
               (h.size() > 1 ? " and " + std::to_string(h.size() - 1) + " more bands" : "");
@@ -253,14 +258,14 @@ long memory_strip_rows(long width, int channels) {
 struct Reading {
   bool memory = false, half = false;
   std::vector<std::string> names;
-  std::vector<const Image*> images;
+  std::vector<SampleView> images;
   int workers = 1;
   long strip = 0;
 };
 
 Reading plan_reading(const InputSet& in, int threads, const BandPartition& bands) {
   Reading g;
-  g.memory = in.bands.front().image != nullptr;
+  g.memory = static_cast<bool>(in.bands.front().image);
   g.half = in.half;
   for (const ProjectionInput& b : in.bands) {
     g.names.push_back(g.memory ? b.name : b.path);

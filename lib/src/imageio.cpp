@@ -363,7 +363,7 @@ class ExrThreadsOff {
 long read_bands(const std::vector<std::string>& paths, const BandPartition& bands, long strip,
                 int workers, bool half, const BandCallbacks& cb) {
   std::vector<BandSource> sources;
-  for (const std::string& p : paths) sources.push_back({p, nullptr});
+  for (const std::string& p : paths) sources.push_back({p, {}});
   return read_bands(sources, bands, strip, workers, half, cb);
 }
 
@@ -383,10 +383,12 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
   // the heap: a higher peak).
   std::vector<std::unique_ptr<ImageReader>> first_readers(paths.size());
   for (std::size_t f = 0; f < paths.size(); ++f) {
-    if (const Image* im = sources[f].image) {  // samples in memory: float rows
-      if (half) throw std::logic_error(paths[f] + ": read_bands() with half on samples in memory");
-      start.push_back(start.back() + im->height);
-      values = std::max(values, std::size_t(std::min(strip, im->height)) * im->row_size());
+    if (const SampleView& im = sources[f].image) {  // samples in memory
+      if (half != im.half)
+        throw std::logic_error(paths[f] + ": read_bands() with half " + (half ? "on" : "off") +
+                               " on samples in memory that are not");
+      start.push_back(start.back() + im.height);
+      values = std::max(values, std::size_t(std::min(strip, im.height)) * im.row_size());
       continue;
     }
     auto opened = std::make_unique<ImageReader>(paths[f]);
@@ -439,9 +441,9 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
           // to the end of the file's strip, the band or the file
           const long y1 = std::min({(y0 / strip + 1) * strip, bands.end(b) - start[f],
                                     start[f + 1] - start[f]});
-          if (const Image* im = sources[f].image)  // copied: the callbacks write in place
-            std::memcpy(float_rows.data(), im->row(y0),
-                        std::size_t(y1 - y0) * im->row_size() * sizeof(float));
+          if (const SampleView& im = sources[f].image)  // copied: the callbacks write in place
+            std::memcpy(half ? static_cast<void*>(half_rows.data()) : float_rows.data(), im.row(y0),
+                        std::size_t(y1 - y0) * im.row_size() * im.value_bytes());
           else if (half)
             reader(f).read_rows_half(y0, y1, half_rows.data());
           else

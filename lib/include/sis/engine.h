@@ -39,7 +39,7 @@ struct RequestError : std::invalid_argument {
 // placed by its data window within its display window, an image's at `row`.
 struct ProjectionInput {
   std::string path;
-  const Image* image = nullptr;
+  SampleView image;  // in-memory: the samples (float or half)
   long row = 0;      // in-memory: the band's first row in the grid
   long rows = 0;     // in-memory: the grid's height (0: the image's own)
   std::string name;  // in-memory: how messages name it ("array")
@@ -50,9 +50,9 @@ struct ProjectionInput {
     in.path = path;
     return in;
   }
-  static ProjectionInput memory(const Image& image, std::string name = "array") {
+  static ProjectionInput memory(SampleView image, std::string name = "array") {
     ProjectionInput in;
-    in.image = &image;
+    in.image = image;
     in.name = std::move(name);
     return in;
   }

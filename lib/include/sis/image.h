@@ -62,6 +62,28 @@ struct Grid {
 
 using Image = Grid<float>;
 
+// Samples held elsewhere (an Image, a caller's array): interleaved rows,
+// float or half (IEEE binary16 bits), read where they are. The owner keeps
+// them alive and unchanged while they are read.
+struct SampleView {
+  const void* data = nullptr;
+  long width = 0, height = 0;
+  int channels = 0;
+  bool half = false;
+
+  SampleView() = default;
+  SampleView(const Image& im)  // NOLINT: every Image is such a view
+      : data(im.data.data()), width(im.width), height(im.height), channels(im.channels) {}
+  SampleView(const void* d, long w, long h, int c, bool is_half)
+      : data(d), width(w), height(h), channels(c), half(is_half) {}
+  explicit operator bool() const { return data != nullptr; }
+  std::size_t row_size() const { return std::size_t(width) * channels; }
+  std::size_t value_bytes() const { return half ? 2 : 4; }
+  const unsigned char* row(long y) const {
+    return static_cast<const unsigned char*>(data) + std::size_t(y) * row_size() * value_bytes();
+  }
+};
+
 // Coefficients of an approximation f_app(x) = sum_n c[n] phi((x - x_n)/h)
 // on a lattice covering an image of image_width x image_height output pixels.
 // For the conventional methods c[n] are the filtered pixel values p[n] and

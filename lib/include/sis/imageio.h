@@ -151,11 +151,12 @@ struct BandCallbacks {
 long read_bands(const std::vector<std::string>& paths, const BandPartition& bands, long strip,
                 int workers, bool half, const BandCallbacks& callbacks);
 // The same over sources that are files or samples in memory (float rows,
-// handed over strip by strip as copies: the callbacks may write them, the
-// caller's samples stay as they are); `name` names a strip's source.
+// or half rows where `half`; handed over strip by strip as copies: the
+// callbacks may write them, the caller's samples stay as they are); `name`
+// names a strip's source.
 struct BandSource {
-  std::string name;             // a file's path, or how messages name the samples
-  const Image* image = nullptr; // samples in memory
+  std::string name;   // a file's path, or how messages name the samples
+  SampleView image;   // samples in memory
 };
 long read_bands(const std::vector<BandSource>& sources, const BandPartition& bands, long strip,
                 int workers, bool half, const BandCallbacks& callbacks);

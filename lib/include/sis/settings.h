@@ -1,0 +1,91 @@
+#pragma once
+// A projection as its users spell it: the settings of siproject's options
+// and of the Python module's keywords, with the same names, defaults and
+// messages in both. resolve() checks them and turns them into the engine's
+// terms; form() projects the inputs (or evaluates a coefficient file) and
+// resamples the final image. What a front end adds is its own: messages,
+// metadata, writing.
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sis/engine.h"
+
+namespace sis {
+
+// More worker threads than this are refused (each has a stack and buffers;
+// the output is the same for every count).
+inline constexpr int kMaxThreads = 1024;
+
+struct Settings {
+  std::optional<double> factor;  // output = input / factor
+  std::string factor_spelling;   // as given, for messages ("" : the number)
+  std::string size;              // "WxH" ("" : none)
+  std::string generator = "cubic", method = "min-error", display, boundary = "mirror";
+  std::string nonfinite = "error", prefilter = "fft", clamp = "none";
+  std::string lattice = "cartesian", quadrature = "point";
+  double density = 1.0;
+  std::string density_spelling;  // as given ("" : the number)
+  bool highlight_compress = false;
+  int threads = 0;  // 0: every core
+  // Which were given (a coefficient file refuses them; a conventional
+  // filter named alone means the conventional method).
+  bool generator_given = false, method_given = false, boundary_given = false;
+  bool lattice_given = false, density_given = false, quadrature_given = false;
+};
+
+// The settings in the engine's terms. Throws RequestError with the message
+// siproject prints ("--generator: unknown generator 'x' ...").
+struct Resolved {
+  Space space;
+  bool hexagonal = false;
+  Method method = Method::MinError;
+  Boundary boundary = Boundary::Mirror;
+  std::optional<Display> display;  // none: the method's default
+  Clamp clamp = Clamp::None;
+  PrefilterMethod prefilter = PrefilterMethod::FFT;
+  bool zero_nonfinite = false, highlight_compress = false;
+  int threads = 1;                  // resolved: at least 1
+  std::pair<long, long> size{0, 0};  // --size, or 0 x 0
+};
+Resolved resolve(const Settings& settings);
+
+// The output size of an input of w x h samples: --size, or w / factor
+// rounded. Throws RequestError where neither is given or the result is empty.
+std::pair<long, long> output_size(const Settings& settings, const Resolved& r, long w, long h);
+
+struct FormRequest {
+  bool keep_coefficients = false;   // Formed::coefficients (else dropped once resampled)
+  bool coefficient_file = false;    // the caller also writes them (the memory estimate)
+  bool float_coefficients = true;   // as a coefficient file keeps them
+  bool final_image = true;          // false: stop after the coefficients
+  std::function<void(double)> progress;
+};
+
+struct Formed {
+  InputSet inputs;
+  Coefficients coefficients;
+  std::unique_ptr<LocalRange> local_range;  // of the samples under each pixel (none from a coefficient file)
+  FinalImage final;
+  Display display;           // the one used (or that would be: the method's default)
+  long width = 0, height = 0;
+  bool from_coefficient_file = false;
+  bool highlight_compressed = false;  // the coefficients hold compressed values
+  bool input_half = false;            // every input stores half (a coefficient file: its input did)
+  NonFiniteReport replaced;           // non-finite samples (or coefficients) replaced by 0
+  std::vector<std::string> warnings;  // for the user, without the tool's name
+  double acquire_seconds = 0, prefilter_seconds = 0, resample_seconds = 0;
+  std::uint64_t estimated_bytes = 0;
+};
+
+// Projects (or evaluates a coefficient file) and resamples, as siproject
+// does. The inputs inspected first by the caller, or by form().
+Formed form(const Settings& settings, const Resolved& resolved, InputSet inputs,
+            const FormRequest& request = {});
+Formed form(const Settings& settings, const std::vector<ProjectionInput>& inputs,
+            const FormRequest& request = {});
+
+}  // namespace sis
