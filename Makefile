@@ -92,9 +92,14 @@ all: scene
 setup:
 	@bash scripts/setup.sh
 
+# The Python module is built with the project's .venv (pybind11, numpy) and
+# put on its path: .venv/bin/python -c "import siproject" after make.
+VENV_PYTHON := $(CURDIR)/.venv/bin/python
 build: setup
-	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE=$(VENV_PYTHON) $(CMAKE_FLAGS) >/dev/null
 	@cmake --build $(BUILD) -j $(JOBS)
+	@site=$$($(VENV_PYTHON) -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])') && \
+	  echo "$(abspath $(BUILD))/python" > "$$site/siproject-build.pth"
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

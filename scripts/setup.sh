@@ -9,7 +9,7 @@ packages=(
   libopenimageio-dev openimageio-tools libopenexr-dev libimath-dev
   libfftw3-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
-  python3 python3-venv python3-pip
+  python3 python3-venv python3-pip python3-dev
   time
 )
 

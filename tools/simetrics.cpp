@@ -233,13 +233,8 @@ int run(const Options& o) {
       inner.integer("truth_height", truth.height);
       inner.number("l2_error", l2_error(k, truth, double(o.border)));
     } else {
-      // scenes/zoneplate.pov: f(u, v) = 1/2 + 1/2 cos(K ((u - 1/2)^2 + (v - 1/2)^2)),
-      // u = x / W, v = y / H over the frame, every channel alike.
       const double K = o.zoneplate, W = k.image_width, H = k.image_height;
-      auto f = [K, W, H](double x, double y, int) {
-        const double u = x / W - 0.5, v = y / H - 0.5;
-        return 0.5 + 0.5 * std::cos(K * (u * u + v * v));
-      };
+      auto f = [K, W, H](double x, double y, int) { return zoneplate(K, W, H, x, y); };
       inner.number("zoneplate_k", K);
       inner.integer("samples_per_pixel", o.samples_per_pixel);
       inner.number("l2_error", l2_error(k, f, o.samples_per_pixel, double(o.border)));

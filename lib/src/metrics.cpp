@@ -326,4 +326,9 @@ OvershootReport overshoot(const Image& output, const Image& input,
   return r;
 }
 
+double zoneplate(double K, double W, double H, double x, double y) {
+  const double u = x / W - 0.5, v = y / H - 0.5;
+  return 0.5 + 0.5 * std::cos(K * (u * u + v * v));
+}
+
 }  // namespace sis

@@ -55,6 +55,11 @@ double l2_error(const Coefficients& coefficients,
                 const std::function<double(double x, double y, int channel)>& truth,
                 int samples_per_pixel, double border_output_pixels = 0, int threads = 1);
 
+// The closed-form image of scenes/zoneplate.pov with ZP_K = K over a frame
+// of W x H output pixels: 1/2 + 1/2 cos(K ((x/W - 1/2)^2 + (y/H - 1/2)^2)),
+// every channel alike (a truth for l2_error).
+double zoneplate(double K, double W, double H, double x, double y);
+
 struct OvershootOptions {
   // The input samples "under" output pixel (i, j) are those whose position
   // falls in [i - r, i + 1 + r) x [j - r, j + 1 + r), r = neighbourhood in

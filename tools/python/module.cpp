@@ -1,0 +1,371 @@
+// siproject._core: the engine for Python. The public API, its defaults and
+// its documentation are in siproject/__init__.py; this file maps it onto
+// sis/settings.h (the same settings, checks and messages as siproject's
+// options) and sis/metrics.h, with the GIL released while the engine works.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cstring>
+#include <memory>
+#include <new>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "sis/engine.h"
+#include "sis/metrics.h"
+#include "sis/settings.h"
+#include "sis/space.h"
+
+namespace py = pybind11;
+using namespace sis;
+
+namespace {
+
+// The engine's errors as Python's: a bad request ValueError, a file OSError
+// (an array's content ValueError), the rest RuntimeError; MemoryError for
+// allocations. Raised with the message siproject prints, without its name.
+struct Raised {
+  PyObject* type;
+  std::string message;
+};
+
+template <typename F>
+auto translated(bool array_input, F&& f) -> decltype(f()) {
+  std::optional<Raised> raised;
+  try {
+    return f();
+  } catch (const RequestError& e) {
+    raised = Raised{PyExc_ValueError, e.what()};
+  } catch (const InputError& e) {
+    raised = Raised{array_input ? PyExc_ValueError : PyExc_OSError, e.what()};
+  } catch (const OutputError& e) {
+    raised = Raised{PyExc_OSError, e.what()};
+  } catch (const std::invalid_argument& e) {
+    raised = Raised{PyExc_ValueError, e.what()};
+  } catch (const std::bad_alloc&) {
+    raised = Raised{PyExc_MemoryError,
+                    "out of memory (the request needs more than the machine has available)"};
+  } catch (const py::error_already_set&) {
+    throw;
+  } catch (const std::exception& e) {
+    raised = Raised{PyExc_RuntimeError, e.what()};
+  }
+  PyErr_SetString(raised->type, raised->message.c_str());
+  throw py::error_already_set();
+}
+
+// A float32 array of shape (H, W, C) that owns the image's samples (moved,
+// not copied).
+py::array_t<float> to_array(Image&& image) {
+  auto* owned = new Image(std::move(image));
+  py::capsule free_when_done(owned, [](void* p) { delete static_cast<Image*>(p); });
+  const py::ssize_t H = owned->height, W = owned->width, C = owned->channels;
+  return py::array_t<float>({H, W, C},
+                            {W * C * py::ssize_t(sizeof(float)), C * py::ssize_t(sizeof(float)),
+                             py::ssize_t(sizeof(float))},
+                            owned->data.data(), free_when_done);
+}
+
+// Coefficients with what a final image or a coefficient file needs of them.
+struct PyCoefficients {
+  Coefficients k;
+  std::vector<std::string> channel_names;
+  int alpha = -1;
+  std::string label;
+  bool highlight_compressed = false;
+  bool input_half = false;
+  int threads = 1;
+};
+
+int resolved_threads(int threads) {
+  Settings s;
+  s.threads = threads;
+  return translated(false, [&] { return resolve(s).threads; });
+}
+
+// The settings of project() and coefficients(): the keywords as siproject's
+// options (None: not given).
+Settings settings_of(const std::string& size, std::optional<double> factor,
+                     const std::string& factor_spelling, std::optional<std::string> generator,
+                     std::optional<std::string> method, const std::string& display,
+                     const std::string& boundary, const std::string& lattice,
+                     std::optional<double> density, const std::string& density_spelling,
+                     std::optional<std::string> quadrature, const std::string& nonfinite,
+                     const std::string& prefilter, const std::string& clamp,
+                     bool highlight_compress, int threads) {
+  Settings s;
+  s.size = size;
+  s.factor = factor;
+  s.factor_spelling = factor_spelling;
+  if (generator) s.generator = *generator, s.generator_given = true;
+  if (method) s.method = *method, s.method_given = true;
+  s.display = display;
+  s.boundary = boundary;
+  s.boundary_given = boundary != "mirror";
+  s.lattice = lattice;
+  s.lattice_given = lattice != "cartesian";
+  if (density) s.density = *density, s.density_given = true, s.density_spelling = density_spelling;
+  if (quadrature) s.quadrature = *quadrature, s.quadrature_given = true;
+  s.nonfinite = nonfinite;
+  s.prefilter = prefilter;
+  s.clamp = clamp;
+  s.highlight_compress = highlight_compress;
+  s.threads = threads;
+  return s;
+}
+
+// Runs form() on a path or an array (float32 or float16, C-contiguous,
+// (H, W, C): the caller's wrapper makes it so), the GIL released.
+// Returns (image or None, coefficients or None, warnings).
+py::tuple run_form(py::object input, const Settings& s, bool coefficients_only) {
+  const bool is_array = py::isinstance<py::array>(input);
+  std::vector<ProjectionInput> inputs;
+  py::array array;
+  std::string path;
+  if (is_array) {
+    array = py::reinterpret_borrow<py::array>(input);
+    const bool half = array.dtype().kind() == 'f' && array.itemsize() == 2;
+    if (array.ndim() != 3 || !(array.flags() & py::array::c_style) ||
+        !(half || (array.dtype().kind() == 'f' && array.itemsize() == 4)))
+      throw std::logic_error("run_form(): the array is not C-contiguous float32 or float16 (H, W, C)");
+    inputs.push_back(ProjectionInput::memory(
+        SampleView(array.data(), long(array.shape(1)), long(array.shape(0)), int(array.shape(2)), half),
+        "array"));
+  } else {
+    path = py::str(input);
+    inputs.push_back(ProjectionInput::file(path));
+  }
+  return translated(is_array, [&] {
+    const Resolved r = resolve(s);
+    FormRequest fr;
+    fr.keep_coefficients = coefficients_only;
+    fr.final_image = !coefficients_only;
+    Formed f;
+    {
+      py::gil_scoped_release free;
+      f = form(s, r, inspect(inputs), fr);
+    }
+    py::list warnings;
+    for (const std::string& w : f.warnings) warnings.append(w);
+    if (!coefficients_only)
+      return py::make_tuple(to_array(std::move(f.final.image)), py::none(), warnings);
+    auto k = std::make_unique<PyCoefficients>();
+    k->k = std::move(f.coefficients);
+    k->channel_names = f.inputs.channel_names;
+    k->alpha = f.inputs.alpha;
+    k->label = f.inputs.label;
+    k->highlight_compressed = f.highlight_compressed;
+    k->input_half = f.input_half;
+    k->threads = r.threads;
+    return py::make_tuple(py::none(), py::cast(std::move(k)), warnings);
+  });
+}
+
+PyCoefficients load_file(const std::string& path, bool zero_nonfinite, int threads) {
+  return translated(false, [&] {
+    PyCoefficients out;
+    ImageReader reader(path);
+    if (!is_coefficient_file(reader))
+      throw InputError(path + ": not a coefficient file (write one with coefficients(...).save() "
+                              "or siproject --coeffs)");
+    out.channel_names = reader.channel_names();
+    out.alpha = reader.alpha_channel();
+    out.label = reader.attribute("sis:input");
+    out.highlight_compressed = reader.attribute("sis:highlight_compress") == "1";
+    out.input_half = reader.attribute("sis:input_format") == "half";
+    reader.release();
+    out.threads = resolved_threads(threads);
+    py::gil_scoped_release free;
+    out.k = load_coefficients(path, zero_nonfinite);
+    return out;
+  });
+}
+
+py::array_t<float> resample_to(const PyCoefficients& c, long width, long height,
+                            const std::string& display, const std::string& clamp) {
+  return translated(false, [&] {
+    const Clamp cl = [&] {
+      try {
+        return parse_clamp(clamp);
+      } catch (const std::invalid_argument& e) {
+        throw RequestError(std::string("--clamp: ") + e.what());
+      }
+    }();
+    if (cl == Clamp::Local)
+      throw RequestError("--clamp local needs the input samples; resample() has the coefficients only");
+    const Display shown = display.empty()
+                              ? (c.k.min_error ? Display::antialiased_2x2() : Display::centred())
+                              : Display::parse(display);
+    const auto frame = visit_space(c.k, [&](auto space) { return space.frame(c.k); });
+    const long W = width > 0 ? width : frame.first, H = height > 0 ? height : frame.second;
+    if (W > kMaxOutputSide || H > kMaxOutputSide)
+      throw RequestError("--size: more than " + std::to_string(kMaxOutputSide) + " pixels per side");
+    FinalImage f;
+    {
+      py::gil_scoped_release free;
+      f = final_image(c.k, shown, W, H, c.highlight_compressed, cl, nullptr, c.threads, c.label,
+                      c.channel_names, c.alpha);
+    }
+    return to_array(std::move(f.image));
+  });
+}
+
+// f_app at the points (x[i], y[i]), every channel: shape (N, C).
+py::array_t<double> evaluate_at(const PyCoefficients& c, py::array_t<double, py::array::c_style> x,
+                             py::array_t<double, py::array::c_style> y) {
+  if (x.size() != y.size()) throw py::value_error("evaluate(): x and y differ in size");
+  const py::ssize_t n = x.size();
+  const int C = c.k.c.channels;
+  py::array_t<double> out({n, py::ssize_t(C)});
+  const double* px = x.data();
+  const double* py_ = y.data();
+  double* o = out.mutable_data();
+  {
+    py::gil_scoped_release free;
+    visit_space(c.k, [&](auto space) {
+      for (py::ssize_t i = 0; i < n; ++i)
+        for (int ch = 0; ch < C; ++ch) o[i * C + ch] = space.evaluate(c.k, Vec2{px[i], py_[i]}, ch);
+      return 0;
+    });
+  }
+  return out;
+}
+
+void save_to(const PyCoefficients& c, const std::string& path) {
+  translated(false, [&] {
+    check_output(path);
+    if (is_8bit_format(path)) throw RequestError("--coeffs " + path + ": coefficient files are float EXR");
+    stage_coefficients(path, c.k, c.channel_names,
+                       {{"sis:input", c.label},
+                        {"sis:input_format", c.input_half ? "half" : "float"},
+                        {"sis:highlight_compress", c.highlight_compressed ? "1" : "0"}})
+        .commit();
+    return 0;
+  });
+}
+
+py::array_t<double> grid_array(const PyCoefficients& c) {
+  const Grid<double>& g = c.k.c;
+  py::array_t<double> out({py::ssize_t(g.height), py::ssize_t(g.width), py::ssize_t(g.channels)});
+  std::memcpy(out.mutable_data(), g.data.data(), g.data.size() * sizeof(double));
+  return out;
+}
+
+// An image array (H, W, C) as the metrics' Image (a copy: they take float rows).
+Image image_of(py::array_t<float, py::array::c_style | py::array::forcecast> a, const char* what) {
+  if (a.ndim() != 3) throw py::value_error(std::string(what) + ": expected an array (H, W, C)");
+  Image im(long(a.shape(1)), long(a.shape(0)), int(a.shape(2)), kUnset);
+  std::memcpy(im.data.data(), a.data(), im.data.size() * sizeof(float));
+  return im;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "The engine of siproject (see the siproject package for the documented API).";
+  py::class_<PyCoefficients>(m, "Coefficients")
+      .def_property_readonly("lattice", [](const PyCoefficients& c) { return space_name(space_of(c.k)); })
+      .def_property_readonly("generator", [](const PyCoefficients& c) { return generator_name(c.k); })
+      .def_property_readonly("method", [](const PyCoefficients& c) {
+        return std::string(c.k.min_error ? "min-error" : "conventional");
+      })
+      .def_property_readonly("boundary", [](const PyCoefficients& c) { return boundary_name(c.k.boundary); })
+      .def_property_readonly("frame", [](const PyCoefficients& c) {
+        return visit_space(c.k, [&](auto space) { return space.frame(c.k); });
+      })
+      .def_property_readonly("channel_names", [](const PyCoefficients& c) { return c.channel_names; })
+      .def_property_readonly("highlight_compressed", [](const PyCoefficients& c) { return c.highlight_compressed; })
+      .def_property_readonly("array", &grid_array)
+      .def("_evaluate", &evaluate_at)
+      .def("_resample", &resample_to)
+      .def("_save", &save_to);
+  m.def("_form", [](py::object input, const std::string& size, std::optional<double> factor,
+                    const std::string& factor_spelling, std::optional<std::string> generator,
+                    std::optional<std::string> method, const std::string& display,
+                    const std::string& boundary, const std::string& lattice,
+                    std::optional<double> density, const std::string& density_spelling,
+                    std::optional<std::string> quadrature, const std::string& nonfinite,
+                    const std::string& prefilter, const std::string& clamp,
+                    bool highlight_compress, int threads, bool coefficients_only) {
+    const Settings s = settings_of(size, factor, factor_spelling, generator, method, display, boundary,
+                                   lattice, density, density_spelling, quadrature, nonfinite,
+                                   prefilter, clamp, highlight_compress, threads);
+    return run_form(input, s, coefficients_only);
+  });
+  m.def("_load", &load_file);
+  m.def("_highpass_shares", [](py::array_t<float, py::array::c_style | py::array::forcecast> a,
+                               std::vector<double> cutoffs) {
+    const Image im = image_of(a, "highpass_share()");
+    return translated(true, [&] { return highpass_energy_shares(im, cutoffs); });
+  });
+  m.def("_l2_error", [](const PyCoefficients& c,
+                        std::optional<py::array_t<float, py::array::c_style | py::array::forcecast>> truth,
+                        std::optional<double> zone_k, int samples_per_pixel, double border) {
+    return translated(true, [&] {
+      if (truth) {
+        const Image ref = image_of(*truth, "l2_error()");
+        if (ref.channels != c.k.c.channels)
+          throw RequestError("l2_error(): the truth has " + std::to_string(ref.channels) +
+                             " channels, the coefficients " + std::to_string(c.k.c.channels));
+        py::gil_scoped_release free;
+        return l2_error(c.k, ref, border, c.threads);
+      }
+      const double K = *zone_k, W = c.k.image_width, H = c.k.image_height;
+      py::gil_scoped_release free;
+      return l2_error(c.k, [&](double x, double y, int) { return zoneplate(K, W, H, x, y); },
+                      samples_per_pixel, border, c.threads);
+    });
+  });
+  m.def("_overshoot", [](py::array_t<float, py::array::c_style | py::array::forcecast> output,
+                         py::array_t<float, py::array::c_style | py::array::forcecast> input,
+                         double neighbourhood, double tolerance, long border) {
+    const Image out = image_of(output, "overshoot()"), in = image_of(input, "overshoot()");
+    OvershootOptions o;
+    o.neighbourhood = neighbourhood;
+    o.tolerance = tolerance;
+    o.border = border;
+    const OvershootReport r = translated(true, [&] { return overshoot(out, in, o); });
+    py::dict d;
+    d["max_overshoot"] = r.max_overshoot;
+    d["max_undershoot"] = r.max_undershoot;
+    d["pixels"] = r.pixels;
+    d["pixels_out_of_range"] = r.pixels_out_of_range;
+    d["negative_pixels"] = r.negative_pixels;
+    d["negative_energy"] = r.negative_energy;
+    d["min"] = r.min;
+    d["max"] = r.max;
+    return d;
+  });
+  m.def("_read_image", [](const std::string& path) {
+    return translated(false, [&] {
+      Image im;
+      {
+        py::gil_scoped_release free;
+        im = read_image(path);
+      }
+      return to_array(std::move(im));
+    });
+  });
+  m.def("_write_image", [](const std::string& path,
+                           py::array_t<float, py::array::c_style | py::array::forcecast> a,
+                           std::vector<std::string> channel_names, int alpha, bool half) {
+    Image im = image_of(a, "write_image()");
+    translated(true, [&] {
+      check_output(path);
+      py::gil_scoped_release free;
+      write_image(path, im, channel_names, {{"Software", "siproject (Python)"}}, alpha,
+                  half ? SampleFormat::Half : SampleFormat::Float);
+      return 0;
+    });
+  });
+  m.def("_luminance", [](py::array_t<float, py::array::c_style | py::array::forcecast> a) {
+    const Image im = image_of(a, "luminance()");
+    const Grid<double> l = translated(true, [&] { return luminance(im); });
+    py::array_t<double> out({py::ssize_t(l.height), py::ssize_t(l.width)});
+    std::memcpy(out.mutable_data(), l.data.data(), l.data.size() * sizeof(double));
+    return out;
+  });
+}
