@@ -5,7 +5,7 @@
                [--factors "1 2 3 4 6 8"] [--ref-factor 32] [--aa "am1-r2 ... am2-r4"]
                [--method NAME='siproject options' ...] [--border 4]
                [--cutoffs "0.125 0.25"] [--show-factor 4] [--repeats 3]
-               [--siproject PATH] [--simetrics PATH] [--label full|quick]
+               [--siproject PATH] [--label full|quick]
 
 For every scene (scenes/SCENE.pov):
   renders    POV-Ray through scripts/render.sh, antialiasing off, at every
@@ -25,7 +25,9 @@ For every scene (scenes/SCENE.pov):
              REPEATS runs);
   reference  display: the reference render's pixel averages (siproject
              --generator box --method conventional at the final size);
-  measures   simetrics per (scene, factor, method): hp shares at CUTOFFS, rms
+  measures   simetrics' measures, by the Python module (siproject, in this
+             process: each reference read once) per (scene, factor, method):
+             hp shares at CUTOFFS, rms
              and psnr against the reference display (border BORDER), overshoot
              against the method's own input (the baseline: the reference
              render), continuous L2 error of f_app against the reference
@@ -53,6 +55,14 @@ import subprocess
 import sys
 import tempfile
 import time
+
+import numpy as np
+
+try:
+    import siproject
+except ImportError as e:
+    sys.exit(f"compare: the Python module siproject is missing ({e}): run make build, which builds it "
+             f"and puts it on .venv's path")
 from atomic import write_atomic  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -274,7 +284,6 @@ def parse_args(argv):
                    help="renders longer than this many seconds are timed once")
     p.add_argument("--zp-nyquist", type=float, default=0.7)
     p.add_argument("--siproject", default=os.path.join(ROOT, "build", "tools", "siproject"))
-    p.add_argument("--simetrics", default=os.path.join(ROOT, "build", "tools", "simetrics"))
     p.add_argument("--label", default="full", help="names the configuration in the report")
     a = p.parse_args(argv)
 
@@ -332,7 +341,6 @@ def parse_args(argv):
     # As the Makefile: ZP_K = ZP_NYQUIST * pi * output width, printed %.6f.
     cfg.zp_k = "%.6f" % (a.zp_nyquist * math.pi * cfg.w)
     cfg.siproject = os.path.abspath(a.siproject)
-    cfg.simetrics = os.path.abspath(a.simetrics)
     return cfg
 
 
@@ -375,12 +383,13 @@ def aa_label(name):
 class Pipeline:
     def __init__(self, cfg, tools):
         self.cfg = cfg
-        self.tools = tools  # {"siproject": path, "simetrics": path, "*_sha": ...}
+        self.tools = tools  # {"siproject": path, "siproject_sha": ..., "module_sha": ...}
         self.digest = Digests(os.path.join(cfg.work, ".digests.json"))
         self.render_sh = os.path.join(HERE, "render.sh")
         self.ini = os.path.join(ROOT, "scenes", "povray.ini")
         self.scratch = tempfile.mkdtemp(prefix="compare-scratch.", dir=cfg.work)
         self.counts = {"render": 0, "project": 0, "measure": 0, "reused": 0}
+        self.images = []  # (path, array): the last few read, newest last
         # Representative method of each approximation (the first with its key).
         self.rep = {}
         for name, opts in cfg.methods:
@@ -520,39 +529,67 @@ class Pipeline:
         return out, info
 
     # -- measures --
+    def image(self, path):
+        """A finite image as a float32 array, read once while it is among the
+        last few asked for (the references and renders serve many measures)."""
+        for i, (p, a) in enumerate(self.images):
+            if p == path:
+                self.images.append(self.images.pop(i))
+                return a
+        a = siproject.read_image(path)
+        if not np.isfinite(a).all():
+            bad = np.argwhere(~np.isfinite(a))[0]
+            raise CompareError(f"{rel(path)}: non-finite value (NaN or Inf) at x {bad[1]}, y {bad[0]}, "
+                               f"channel {bad[2]}")
+        self.images.append((path, a))
+        del self.images[:-4]
+        return a
+
     def measure(self, scene, key, image, image_digest, refdisp, refdisp_digest, inp, inp_digest,
                 coeffs=None, coeffs_digest=None, truth=None, truth_digest=None, zoneplate=False,
                 factor=None):
+        """simetrics' measures of IMAGE, computed here by the module: hp shares
+        at the cutoffs, rms and psnr against REFDISP, overshoot against INP,
+        and the continuous L2 error of COEFFS against TRUTH or the zone plate."""
         cfg = self.cfg
         out = os.path.join(cfg.work, scene, key + ".metrics.json")
-        flags = ["--json", "--border", str(cfg.border), "--peak", "1"]
-        for c in cfg.cutoffs:
-            flags += ["--cutoff", repr(c)]
-        if factor is not None:
-            flags += ["--factor", repr(factor)]
         use_zp = bool(coeffs) and zoneplate
-        stamp = {"schema": SCHEMA, "simetrics": self.tools["simetrics_sha"], "flags": flags,
+        stamp = {"schema": SCHEMA, "measures": self.tools["module_sha"], "border": cfg.border,
+                 "cutoffs": cfg.cutoffs, "factor": factor,
                  "image": image_digest, "reference": refdisp_digest, "input": inp_digest,
                  "coeffs": coeffs_digest if coeffs else None,
                  "truth": truth_digest if (coeffs and not use_zp) else None,
                  "zoneplate": [cfg.zp_k, self.zp_spp()] if use_zp else None}
-        args = flags + ["--reference", refdisp, "--input", inp]
         info = fresh(out, stamp, [])
         if info:
             self.counts["reused"] += 1
             return info["metrics"]
-        if coeffs:
-            args += ["--coeffs", coeffs]
-            if use_zp:
-                args += ["--zoneplate", cfg.zp_k, "--samples-per-pixel", str(self.zp_spp())]
-            else:
-                args += ["--truth", truth]
         t0 = time.perf_counter()
-        text, _ = run([self.tools["simetrics"], image] + args, f"simetrics on {rel(image)}")
         try:
-            metrics = json.loads(text)
-        except ValueError:
-            raise CompareError(f"simetrics on {rel(image)} printed no JSON: {text[:200]}")
+            img = self.image(image)
+            ref = self.image(refdisp)
+            src = self.image(inp)
+            if ref.shape != img.shape:
+                raise CompareError(f"{rel(refdisp)} is {ref.shape}, {rel(image)} {img.shape}")
+            h, w = img.shape[:2]
+            if factor is not None and (round(src.shape[1] / factor) != w or round(src.shape[0] / factor) != h):
+                raise CompareError(f"{rel(inp)} is {src.shape[1]} x {src.shape[0]}: at factor {factor} "
+                                   f"it does not cover {rel(image)} ({w} x {h})")
+            metrics = {"width": w, "height": h, "channels": img.shape[2]}
+            for c, share in zip(cfg.cutoffs, siproject.highpass_share(img, cfg.cutoffs)):
+                metrics["hp_" + format(c, "g")] = share
+            metrics["rms"] = siproject.rms_difference(img, ref, border=cfg.border)
+            metrics["psnr"] = siproject.psnr(img, ref, peak=1.0, border=cfg.border)
+            metrics["overshoot"] = siproject.overshoot(img, src, border=cfg.border)
+            if coeffs:
+                k = siproject.load(coeffs)
+                l2 = (siproject.l2_error(k, zoneplate=float(cfg.zp_k), samples_per_pixel=self.zp_spp(),
+                                         border=cfg.border) if use_zp
+                      else siproject.l2_error(k, self.image(truth), border=cfg.border))
+                metrics["continuous"] = {"l2_error": l2}
+        except (ValueError, OSError, RuntimeError) as e:
+            raise CompareError(f"measures of {rel(image)}: {e}")
+        metrics = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in metrics.items()}
         write_json(out, {"stamp": stamp, "metrics": metrics})
         self.counts["measure"] += 1
         say(f"measure  {scene:<10} {key:<22} {time.perf_counter() - t0:.1f} s")
@@ -564,7 +601,7 @@ class Pipeline:
 
 def snapshot_tools(cfg, folder):
     tools = {}
-    for name in ("siproject", "simetrics"):
+    for name in ("siproject",):
         src = getattr(cfg, name)
         if not (os.path.isfile(src) and os.access(src, os.X_OK)):
             raise CompareError(f"{name} not found or not executable: {src} (run make build, or pass its path)")
@@ -573,6 +610,9 @@ def snapshot_tools(cfg, folder):
         with open(dst, "rb") as f:
             tools[name + "_sha"] = hashlib.sha256(f.read()).hexdigest()[:16]
         tools[name] = dst
+    # the measures' engine: the Python module (build/python, on .venv's path)
+    with open(siproject._core.__file__, "rb") as f:
+        tools["module_sha"] = hashlib.sha256(f.read()).hexdigest()[:16]
     if shutil.which("povray") is None:
         raise CompareError("povray not found on PATH (run scripts/setup.sh)")
     return tools

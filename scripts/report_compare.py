@@ -30,7 +30,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import OpenEXR  # noqa: E402
+import siproject  # noqa: E402
 from PIL import Image, ImageDraw  # noqa: E402
 
 from atomic import current_umask  # noqa: E402
@@ -126,28 +126,17 @@ def geomean(xs):
 # ---- images -------------------------------------------------------------------------
 
 def read_exr(path):
-    with OpenEXR.File(path) as f:
-        ch = f.channels()
-        if "RGB" in ch:
-            a = np.asarray(ch["RGB"].pixels, dtype=np.float64)
-        elif all(k in ch for k in "RGB"):
-            a = np.stack([np.asarray(ch[k].pixels, dtype=np.float64) for k in "RGB"], axis=-1)
-        else:
-            first = np.asarray(next(iter(ch.values())).pixels, dtype=np.float64)
-            a = first if first.ndim == 3 else np.repeat(first[..., None], 3, axis=-1)
-    if a.ndim != 3:
-        raise ValueError(f"{path}: unexpected pixel array shape {a.shape}")
-    return a[..., :3]
+    """The first three channels (grey repeated) as float64, read by the module."""
+    a = siproject.read_image(path).astype(np.float64)
+    return a[..., :3] if a.shape[2] >= 3 else np.repeat(a[..., :1], 3, axis=-1)
 
 
 def luminance(a):
-    return 0.2126 * a[..., 0] + 0.7152 * a[..., 1] + 0.0722 * a[..., 2]
+    return siproject.luminance(a[..., :3])
 
 
 def srgb8(a):
-    x = np.clip(a, 0.0, 1.0)
-    y = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
-    return np.round(255 * y).astype(np.uint8)
+    return siproject.srgb8(a)
 
 
 def upscale(img8, k):
@@ -907,7 +896,7 @@ def build_html(meta, rows, d, charts, scene_cards, files):
         H.append("</details>")
     H.append(f"<p class='note'>Made by <code>make compare</code> (scripts/compare.py, scripts/report_compare.py) in "
              f"{m['pipeline_s']:.0f} s; steps made this run: {esc(json.dumps(m['steps']))}; siproject "
-             f"{esc(m['tools'].get('siproject_sha'))}, simetrics {esc(m['tools'].get('simetrics_sha'))}.</p>")
+             f"{esc(m['tools'].get('siproject_sha'))}, measures (Python module) {esc(m['tools'].get('module_sha'))}.</p>")
     H.append("</body></html>")
     return "\n".join(H)
 

@@ -23,18 +23,18 @@ struct FftwFree {
   void operator()(void* p) const { fftw_free(p); }
 };
 
-std::string size_of(const Image& a) {
+std::string size_of(const ImageView& a) {
   std::ostringstream s;
   s << a.width << " x " << a.height << " x " << a.channels;
   return s.str();
 }
 
-void check_not_empty(const Image& a, const char* fn) {
+void check_not_empty(const ImageView& a, const char* fn) {
   if (a.width < 1 || a.height < 1 || a.channels < 1)
     throw std::invalid_argument(std::string(fn) + "(): image " + size_of(a) + " is empty");
 }
 
-void check_same_shape(const Image& a, const Image& b, const char* fn) {
+void check_same_shape(const ImageView& a, const ImageView& b, const char* fn) {
   if (a.width != b.width || a.height != b.height || a.channels != b.channels)
     throw std::invalid_argument(std::string(fn) + "(): images differ in size: " + size_of(a) +
                                 " against " + size_of(b));
@@ -117,14 +117,14 @@ double l2_on_grid(const Coefficients& k, long ref_w, long ref_h, double border, 
 
 }  // namespace
 
-Grid<double> luminance(const Image& image) {
+Grid<double> luminance(const ImageView& image) {
   check_not_empty(image, "luminance");
   Grid<double> y(image.width, image.height, 1);
   const std::size_t n = std::size_t(image.width) * image.height;
   const std::size_t C = image.channels;
   if (C >= 3) {
     for (std::size_t p = 0; p < n; ++p) {
-      const float* v = image.data.data() + p * C;
+      const float* v = image.data + p * C;
       y.data[p] = 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2];
     }
   } else {
@@ -133,7 +133,7 @@ Grid<double> luminance(const Image& image) {
   return y;
 }
 
-std::vector<double> highpass_energy_shares(const Image& image, const std::vector<double>& cutoffs) {
+std::vector<double> highpass_energy_shares(const ImageView& image, const std::vector<double>& cutoffs) {
   for (double c : cutoffs)
     if (!std::isfinite(c) || c < 0)
       throw std::invalid_argument("highpass_energy_share(): cutoff " + std::to_string(c) +
@@ -196,11 +196,11 @@ std::vector<double> highpass_energy_shares(const Image& image, const std::vector
   return share;
 }
 
-double highpass_energy_share(const Image& image, double cutoff_cycles_per_pixel) {
+double highpass_energy_share(const ImageView& image, double cutoff_cycles_per_pixel) {
   return highpass_energy_shares(image, {cutoff_cycles_per_pixel})[0];
 }
 
-double rms_difference(const Image& a, const Image& b, long border) {
+double rms_difference(const ImageView& a, const ImageView& b, long border) {
   check_same_shape(a, b, "rms_difference");
   check_not_empty(a, "rms_difference");
   if (border < 0 || 2 * border >= a.width || 2 * border >= a.height)
@@ -222,7 +222,7 @@ double rms_difference(const Image& a, const Image& b, long border) {
   return std::sqrt(sum / count);
 }
 
-double psnr(const Image& a, const Image& b, double peak, long border) {
+double psnr(const ImageView& a, const ImageView& b, double peak, long border) {
   if (!(peak > 0) || !std::isfinite(peak))
     throw std::invalid_argument("psnr(): peak " + std::to_string(peak) +
                                 " is not a finite value > 0");
@@ -231,7 +231,7 @@ double psnr(const Image& a, const Image& b, double peak, long border) {
   return 20 * std::log10(peak / rms);
 }
 
-double l2_error(const Coefficients& coefficients, const Image& reference,
+double l2_error(const Coefficients& coefficients, const ImageView& reference,
                 double border_output_pixels, int threads) {
   check_not_empty(reference, "l2_error");
   if (reference.channels != coefficients.c.channels)
@@ -256,7 +256,7 @@ double l2_error(const Coefficients& coefficients,
                     [&](long i, long j, int c) { return truth((i + 0.5) * sx, (j + 0.5) * sy, c); });
 }
 
-OvershootReport overshoot(const Image& output, const Image& input,
+OvershootReport overshoot(const ImageView& output, const ImageView& input,
                           const OvershootOptions& options) {
   check_not_empty(output, "overshoot");
   check_not_empty(input, "overshoot");

@@ -270,3 +270,13 @@ def test_help_shows_every_option_with_its_default():
         assert name in siproject.project.__doc__
     assert sig.parameters["boundary"].default == "mirror"
     assert sig.parameters["threads"].default == 0
+
+
+def test_srgb8_is_what_an_8bit_file_holds(tmp_path):
+    from PIL import Image
+    img = scene()
+    img[0, :8, 0] = [-1, 0, 0.0031308, 0.5, 0.999, 1, 2, np.inf]
+    png = tmp_path / "out.png"
+    siproject.write_image(png, img)
+    held = np.asarray(Image.open(png))
+    assert np.array_equal(siproject.srgb8(img), held)

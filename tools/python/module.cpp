@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cstdint>
 #include <cstring>
 #include <memory>
 #include <new>
@@ -254,11 +255,20 @@ py::array_t<double> grid_array(const PyCoefficients& c) {
   return out;
 }
 
-// An image array (H, W, C) as the metrics' Image (a copy: they take float rows).
-Image image_of(py::array_t<float, py::array::c_style | py::array::forcecast> a, const char* what) {
+// An image array (H, W, C) as the measures' view: read where it is (the
+// array argument, float32 C-contiguous or made so by pybind11, outlives the
+// call).
+using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+ImageView view_of(const FloatArray& a, const char* what) {
   if (a.ndim() != 3) throw py::value_error(std::string(what) + ": expected an array (H, W, C)");
-  Image im(long(a.shape(1)), long(a.shape(0)), int(a.shape(2)), kUnset);
-  std::memcpy(im.data.data(), a.data(), im.data.size() * sizeof(float));
+  return ImageView(a.data(), long(a.shape(1)), long(a.shape(0)), int(a.shape(2)));
+}
+
+// Image copies, for write_image (which takes an Image).
+Image image_of(const FloatArray& a, const char* what) {
+  const ImageView v = view_of(a, what);
+  Image im(v.width, v.height, v.channels, kUnset);
+  std::memcpy(im.data.data(), v.data, im.data.size() * sizeof(float));
   return im;
 }
 
@@ -296,17 +306,27 @@ PYBIND11_MODULE(_core, m) {
     return run_form(input, s, coefficients_only);
   });
   m.def("_load", &load_file);
-  m.def("_highpass_shares", [](py::array_t<float, py::array::c_style | py::array::forcecast> a,
-                               std::vector<double> cutoffs) {
-    const Image im = image_of(a, "highpass_share()");
-    return translated(true, [&] { return highpass_energy_shares(im, cutoffs); });
+  m.def("_highpass_shares", [](FloatArray a, std::vector<double> cutoffs) {
+    const ImageView im = view_of(a, "highpass_share()");
+    return translated(true, [&] {
+      py::gil_scoped_release free;
+      return highpass_energy_shares(im, cutoffs);
+    });
+  });
+  m.def("_rms_difference", [](FloatArray a, FloatArray b, long border) {
+    const ImageView va = view_of(a, "rms_difference()"), vb = view_of(b, "rms_difference()");
+    return translated(true, [&] { return rms_difference(va, vb, border); });
+  });
+  m.def("_psnr", [](FloatArray a, FloatArray b, double peak, long border) {
+    const ImageView va = view_of(a, "psnr()"), vb = view_of(b, "psnr()");
+    return translated(true, [&] { return psnr(va, vb, peak, border); });
   });
   m.def("_l2_error", [](const PyCoefficients& c,
-                        std::optional<py::array_t<float, py::array::c_style | py::array::forcecast>> truth,
+                        std::optional<FloatArray> truth,
                         std::optional<double> zone_k, int samples_per_pixel, double border) {
     return translated(true, [&] {
       if (truth) {
-        const Image ref = image_of(*truth, "l2_error()");
+        const ImageView ref = view_of(*truth, "l2_error()");
         if (ref.channels != c.k.c.channels)
           throw RequestError("l2_error(): the truth has " + std::to_string(ref.channels) +
                              " channels, the coefficients " + std::to_string(c.k.c.channels));
@@ -319,15 +339,17 @@ PYBIND11_MODULE(_core, m) {
                       samples_per_pixel, border, c.threads);
     });
   });
-  m.def("_overshoot", [](py::array_t<float, py::array::c_style | py::array::forcecast> output,
-                         py::array_t<float, py::array::c_style | py::array::forcecast> input,
-                         double neighbourhood, double tolerance, long border) {
-    const Image out = image_of(output, "overshoot()"), in = image_of(input, "overshoot()");
+  m.def("_overshoot", [](FloatArray output, FloatArray input, double neighbourhood,
+                         double tolerance, long border) {
+    const ImageView out = view_of(output, "overshoot()"), in = view_of(input, "overshoot()");
     OvershootOptions o;
     o.neighbourhood = neighbourhood;
     o.tolerance = tolerance;
     o.border = border;
-    const OvershootReport r = translated(true, [&] { return overshoot(out, in, o); });
+    const OvershootReport r = translated(true, [&] {
+      py::gil_scoped_release free;
+      return overshoot(out, in, o);
+    });
     py::dict d;
     d["max_overshoot"] = r.max_overshoot;
     d["max_undershoot"] = r.max_undershoot;
@@ -349,8 +371,7 @@ PYBIND11_MODULE(_core, m) {
       return to_array(std::move(im));
     });
   });
-  m.def("_write_image", [](const std::string& path,
-                           py::array_t<float, py::array::c_style | py::array::forcecast> a,
+  m.def("_write_image", [](const std::string& path, FloatArray a,
                            std::vector<std::string> channel_names, int alpha, bool half) {
     Image im = image_of(a, "write_image()");
     translated(true, [&] {
@@ -361,8 +382,20 @@ PYBIND11_MODULE(_core, m) {
       return 0;
     });
   });
-  m.def("_luminance", [](py::array_t<float, py::array::c_style | py::array::forcecast> a) {
-    const Image im = image_of(a, "luminance()");
+  m.def("_srgb8", [](FloatArray a) {
+    const ImageView im = view_of(a, "srgb8()");
+    py::array_t<std::uint8_t> out({py::ssize_t(im.height), py::ssize_t(im.width), py::ssize_t(im.channels)});
+    std::uint8_t* o = out.mutable_data();
+    const std::size_t n = std::size_t(im.width) * im.height * im.channels;
+    {
+      py::gil_scoped_release free;
+      // as an 8-bit file holds it: encoded, then OpenImageIO's rounding to 8 bits
+      for (std::size_t q = 0; q < n; ++q) o[q] = std::uint8_t(linear_to_srgb(im.data[q]) * 255.0f + 0.5f);
+    }
+    return out;
+  });
+  m.def("_luminance", [](FloatArray a) {
+    const ImageView im = view_of(a, "luminance()");
     const Grid<double> l = translated(true, [&] { return luminance(im); });
     py::array_t<double> out({py::ssize_t(l.height), py::ssize_t(l.width)});
     std::memcpy(out.mutable_data(), l.data.data(), l.data.size() * sizeof(double));

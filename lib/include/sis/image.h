@@ -62,6 +62,21 @@ struct Grid {
 
 using Image = Grid<float>;
 
+// A float image held elsewhere (an Image, a caller's array), read where it
+// is: interleaved rows as Image's. What the measures take.
+struct ImageView {
+  const float* data = nullptr;
+  long width = 0, height = 0;
+  int channels = 0;
+
+  ImageView() = default;
+  ImageView(const Image& im)  // NOLINT: every Image is such a view
+      : data(im.data.data()), width(im.width), height(im.height), channels(im.channels) {}
+  ImageView(const float* d, long w, long h, int c) : data(d), width(w), height(h), channels(c) {}
+  const float* row(long y) const { return data + std::size_t(y) * width * channels; }
+  float at(long x, long y, int c) const { return data[(std::size_t(y) * width + x) * channels + c]; }
+};
+
 // Samples held elsewhere (an Image, a caller's array): interleaved rows,
 // float or half (IEEE binary16 bits), read where they are. The owner keeps
 // them alive and unchanged while they are read.

@@ -15,7 +15,7 @@ namespace sis {
 // 0.2126 R + 0.7152 G + 0.0722 B of the first three channels when there are
 // three or more (linear RGB; further channels such as alpha are ignored);
 // channel 0 itself for one or two channels (grey, grey + alpha).
-Grid<double> luminance(const Image& image);
+Grid<double> luminance(const ImageView& image);
 
 // Share in [0, 1] of the luminance's DFT energy sum |F(k)|^2 at radial
 // frequency sqrt(fx^2 + fy^2) strictly greater than the cutoff (cycles per
@@ -25,16 +25,16 @@ Grid<double> luminance(const Image& image);
 // periodic: the image's edges meet, and a jump between them adds high-pass
 // energy. Cutoffs must be finite and >= 0, and so must every luminance
 // value (throws std::invalid_argument otherwise); one DFT serves every cutoff.
-std::vector<double> highpass_energy_shares(const Image& image, const std::vector<double>& cutoffs);
-double highpass_energy_share(const Image& image, double cutoff_cycles_per_pixel);
+std::vector<double> highpass_energy_shares(const ImageView& image, const std::vector<double>& cutoffs);
+double highpass_energy_share(const ImageView& image, double cutoff_cycles_per_pixel);
 
 // RMS over every channel of a - b, leaving out a band of `border` pixels
 // along each edge. The images must have equal sizes and channel counts.
-double rms_difference(const Image& a, const Image& b, long border = 0);
+double rms_difference(const ImageView& a, const ImageView& b, long border = 0);
 
 // 20 log10(peak / rms_difference(a, b, border)) in dB; +infinity when the
 // images are equal inside the border.
-double psnr(const Image& a, const Image& b, double peak = 1.0, long border = 0);
+double psnr(const ImageView& a, const ImageView& b, double peak = 1.0, long border = 0);
 
 // Continuous L2 error of f_app against a reference render f of the same
 // image_width x image_height frame at a much higher factor: f's sample (i, j)
@@ -44,7 +44,7 @@ double psnr(const Image& a, const Image& b, double peak = 1.0, long border = 0);
 // sqrt(mean of (f_app - f)^2) over every channel and every sample whose
 // position lies in [border, image_width - border] x [border, image_height -
 // border], the RMS estimate of the normalised L2 norm of f_app - f.
-double l2_error(const Coefficients& coefficients, const Image& reference,
+double l2_error(const Coefficients& coefficients, const ImageView& reference,
                 double border_output_pixels = 0, int threads = 1);
 
 // The same against a closed-form truth f(x, y, channel) (output-pixel
@@ -91,7 +91,7 @@ struct OvershootReport {
 // the same frame: input sample (k, l) sits at ((k + 1/2) W / W_in,
 // (l + 1/2) H / H_in) in the output's pixels, any ratio per axis. The
 // channel counts must match.
-OvershootReport overshoot(const Image& output, const Image& input,
+OvershootReport overshoot(const ImageView& output, const ImageView& input,
                           const OvershootOptions& options = {});
 
 }  // namespace sis

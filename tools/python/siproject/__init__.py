@@ -39,9 +39,12 @@ __all__ = [
     "load",
     "Coefficients",
     "highpass_share",
+    "rms_difference",
+    "psnr",
     "l2_error",
     "overshoot",
     "luminance",
+    "srgb8",
     "read_image",
     "write_image",
 ]
@@ -228,6 +231,17 @@ def highpass_share(image: np.ndarray, cutoff: Union[float, Sequence[float]] = 0.
     return shares[0] if single else list(shares)
 
 
+def rms_difference(a: np.ndarray, b: np.ndarray, *, border: int = 0) -> float:
+    """RMS over every channel of a - b, leaving out `border` pixels along
+    each edge (images of one size)."""
+    return _core._rms_difference(_samples(a), _samples(b), int(border))
+
+
+def psnr(a: np.ndarray, b: np.ndarray, *, peak: float = 1.0, border: int = 0) -> float:
+    """20 log10(peak / rms_difference(a, b)) in dB (infinite when equal)."""
+    return _core._psnr(_samples(a), _samples(b), float(peak), int(border))
+
+
 def l2_error(k: Coefficients, truth: Optional[np.ndarray] = None, *,
              zoneplate: Optional[float] = None, samples_per_pixel: int = 8,
              border: float = 0.0) -> float:
@@ -256,6 +270,12 @@ def overshoot(output: np.ndarray, input: np.ndarray, *, neighbourhood: float = 1
 def luminance(image: np.ndarray) -> np.ndarray:
     """Rec. 709 luminance of linear RGB (channel 0 for one or two channels)."""
     return _core._luminance(_samples(image))
+
+
+def srgb8(image: np.ndarray) -> np.ndarray:
+    """Linear values as the 8-bit sRGB an 8-bit output file holds (every
+    channel encoded and clamped to [0, 1]), uint8 of the same shape."""
+    return _core._srgb8(_samples(image))
 
 
 def read_image(path: Union[str, "os.PathLike[str]"]) -> np.ndarray:
