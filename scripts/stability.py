@@ -6,10 +6,11 @@ and every number in OUT/stability.json and OUT/*.csv.
     stability.py --build build --out out/report/stability [--quick]
 
 Renders (POV-Ray through scripts/render.sh) are cached under
-OUT/../../stability-render/ and redone only when missing. Measures come from
-the project's tools: sistability (synthetic: noise gain, step response,
-prefilter numerics), siproject (every method and remedy), simetrics
-(continuous L2 error, display RMS, overshoot and negatives).
+OUT/../../stability-render/ and redone only when missing. Every method and
+remedy is projected, and measured (continuous L2 error, display RMS,
+overshoot and negatives), by the Python module siproject; the synthetic
+studies (noise gain, step response, prefilter numerics) come from the
+sistability tool.
 """
 import argparse
 import csv
@@ -25,28 +26,35 @@ import time
 
 import matplotlib
 import numpy as np
-import OpenEXR
+
+try:
+    import siproject
+except ImportError as e:
+    sys.exit(f"stability.py: the Python module siproject is missing ({e}): run make build")
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
+# siproject's keywords of each method and remedy (the Makefile's METHOD_OPTS_*).
 METHODS = {
-    "box": ["--generator", "box", "--method", "conventional", "--display", "centred"],
-    "conv-tent": ["--generator", "tent", "--method", "conventional", "--display", "centred"],
-    "mitchell": ["--generator", "mitchell", "--method", "conventional", "--display", "centred"],
-    "me-tent": ["--generator", "tent", "--method", "min-error", "--display", "centred"],
-    "me-cubic": ["--generator", "cubic", "--method", "min-error", "--display", "centred"],
-    "me-tent-2x2": ["--generator", "tent", "--method", "min-error", "--display", "2x2"],
-    "me-cubic-2x2": ["--generator", "cubic", "--method", "min-error", "--display", "2x2"],
+    "box": dict(generator="box", method="conventional", display="centred"),
+    "conv-tent": dict(generator="tent", method="conventional", display="centred"),
+    "mitchell": dict(generator="mitchell", method="conventional", display="centred"),
+    "me-tent": dict(generator="tent", method="min-error", display="centred"),
+    "me-cubic": dict(generator="cubic", method="min-error", display="centred"),
+    "me-tent-2x2": dict(generator="tent", method="min-error", display="2x2"),
+    "me-cubic-2x2": dict(generator="cubic", method="min-error", display="2x2"),
 }
 REMEDIES = {
-    "none": [],
-    "clamp zero": ["--clamp", "zero"],
-    "clamp local": ["--clamp", "local"],
-    "highlight-compress": ["--highlight-compress"],
+    "none": {},
+    "clamp zero": dict(clamp="zero"),
+    "clamp local": dict(clamp="local"),
+    "highlight-compress": dict(highlight_compress=True),
 }
+# simetrics' default points per output pixel for the zone plate's closed form
+ZONEPLATE_SPP = 8
 
 
 def fail(msg):
@@ -78,21 +86,21 @@ def render(scene, path, w, h, extra=()):
 
 class Tools:
     def __init__(self, build):
-        self.siproject = os.path.join(build, "tools/siproject")
-        self.simetrics = os.path.join(build, "tools/simetrics")
         self.sistability = os.path.join(build, "tools/sistability")
-        for t in (self.siproject, self.simetrics, self.sistability):
-            if not os.access(t, os.X_OK):
-                fail(f"{t} is missing: run make build")
+        if not os.access(self.sistability, os.X_OK):
+            fail(f"{self.sistability} is missing: run make build")
 
-    def project(self, src, out, size, opts, coeffs=None):
-        cmd = [self.siproject, src, "-o", out, "--size", size, "-q", "-d", "float", *opts]
-        if coeffs:
-            cmd += ["--coeffs", coeffs]
-        run(cmd)
 
-    def metrics(self, image, *args):
-        return json.loads(run([self.simetrics, image, "--json", *args]))
+def coefficients_of(display_options):
+    """The keywords of siproject.coefficients(): a method's, without its display."""
+    return {k: v for k, v in display_options.items() if k not in ("display", "clamp")}
+
+
+def checked(call, *args, **kwargs):
+    try:
+        return call(*args, **kwargs)
+    except (ValueError, OSError, RuntimeError) as e:
+        fail(str(e))
 
 
 def zoneplate_k(width, nyquist=0.7):
@@ -109,10 +117,10 @@ def factor_sweep(tools, work, res, factors):
         for m, opts in METHODS.items():
             if m.endswith("-2x2"):
                 continue  # the display does not change f_app: same error as its centred twin
-            out, c = os.path.join(work, "sweep.exr"), os.path.join(work, "sweep-c.exr")
-            tools.project(src, out, f"{res}x{res}", opts, coeffs=c)
-            j = tools.metrics(out, "--coeffs", c, "--zoneplate", f"{k:.6f}", "--border", "2")
-            rows.append({"factor": f, "method": m, "l2_error": j["continuous"]["l2_error"],
+            c = checked(siproject.coefficients, src, size=res, **coefficients_of(opts))
+            rows.append({"factor": f, "method": m,
+                         "l2_error": checked(siproject.l2_error, c, zoneplate=float(f"{k:.6f}"),
+                                             samples_per_pixel=ZONEPLATE_SPP, border=2),
                          "render_s": t_render})
     return rows
 
@@ -135,16 +143,16 @@ def edges_study(tools, work, res, factor, ref_factor):
     ref = os.path.join(work, f"edges-{res}-f{ref_factor}.exr")
     render("edges", src, res * factor, res * factor)
     render("edges", ref, res * ref_factor, res * ref_factor)
+    samples, truth = siproject.read_image(src), siproject.read_image(ref)
     rows = []
     for m, opts in METHODS.items():
-        out, c = os.path.join(work, f"edges-{m}.exr"), os.path.join(work, "edges-c.exr")
-        tools.project(src, out, f"{res}x{res}", opts, coeffs=c)
-        j = tools.metrics(out, "--input", src, "--coeffs", c, "--truth", ref, "--border", "2")
-        o = j["overshoot"]
+        c = checked(siproject.coefficients, samples, size=res, **coefficients_of(opts))
+        image = checked(c.resample, res, display=opts["display"])
+        o = checked(siproject.overshoot, image, samples, border=2)
         rows.append({"method": m, "max_overshoot": o["max_overshoot"],
                      "max_undershoot": o["max_undershoot"],
                      "pixels_out_of_range": o["pixels_out_of_range"], "pixels": o["pixels"],
-                     "l2_error": j["continuous"]["l2_error"]})
+                     "l2_error": checked(siproject.l2_error, c, truth, border=2)})
     return rows
 
 
@@ -153,34 +161,30 @@ def hdr_study(tools, work, res, factor, ref_factor):
     ref = os.path.join(work, f"hdr-{res}-f{ref_factor}.exr")
     render("hdr", src, res * factor, res * factor)
     render("hdr", ref, res * ref_factor, res * ref_factor)
+    samples = siproject.read_image(src)
     # The display the reference would give: the area average of its samples.
-    ref_display = os.path.join(work, f"hdr-{res}-reference-display.exr")
-    tools.project(ref, ref_display, f"{res}x{res}", METHODS["box"])
+    ref_display = checked(siproject.project, ref, size=res, **METHODS["box"])
     rows = []
     for m in ("box", "conv-tent", "mitchell", "me-tent", "me-cubic", "me-cubic-2x2"):
         for remedy, ropts in REMEDIES.items():
             if remedy != "none" and not m.startswith("me-"):
                 continue
             out = os.path.join(work, f"hdr-{m}-{remedy.replace(' ', '-')}.exr")
-            tools.project(src, out, f"{res}x{res}", METHODS[m] + ropts)
-            j = tools.metrics(out, "--input", src, "--reference", ref_display, "--border", "2",
-                              "--peak", "1")
-            o = j["overshoot"]
+            image = checked(siproject.project, samples, size=res, **METHODS[m], **ropts)
+            checked(siproject.write_image, out, image)
+            o = checked(siproject.overshoot, image, samples, border=2)
             rows.append({"method": m, "remedy": remedy, "negative_pixels": o["negative_pixels"],
                          "negative_energy": o["negative_energy"], "min": o["min"], "max": o["max"],
                          "max_undershoot": o["max_undershoot"],
                          "pixels_out_of_range": o["pixels_out_of_range"],
-                         "display_rms": j["rms"], "image": os.path.basename(out)})
+                         "display_rms": checked(siproject.rms_difference, image, ref_display, border=2),
+                         "image": os.path.basename(out)})
     return rows, src, ref_display
 
 
 def read_exr(path):
-    """Float array H x W x C of an EXR (the channels as the file groups them)."""
-    with OpenEXR.File(path) as f:
-        chans = f.parts[0].channels
-        arrs = [np.asarray(c.pixels, dtype=np.float64) for c in chans.values()]
-    arrs = [a if a.ndim == 3 else a[:, :, None] for a in arrs]
-    return np.concatenate(arrs, axis=2)
+    """Float array H x W x C of an image, read by the module."""
+    return siproject.read_image(path).astype(np.float64)
 
 
 def viz_signed(exr, png, scale=4):
