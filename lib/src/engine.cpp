@@ -365,30 +365,52 @@ void keep_least(std::atomic<long>& seen, long value) {
   }
 }
 
+// What every piece of a strip's samples passes on the worker that decoded
+// it, before the acquisition sums it, on both lattices: the non-finite scan
+// (each such sample counted and zeroed), then the sRGB decoding, the local
+// range (the samples folded in) and the highlight compression. A piece is
+// values [k0, k1) of one strip row, interleaved.
+struct SampleStages {
+  using Counts = std::vector<std::atomic<long>>;
+  ValueHook decode, compress;  // empty: not asked for
+
+  // The piece as float in v (converted from the strip's half row where
+  // given), its non-finite samples counted into bad[r] (the least first
+  // value index into bad_first[r]) and zeroed.
+  static void scan(const std::uint16_t* half_row, long r, long k0, long k1, float* v, Counts& bad,
+                   Counts& bad_first) {
+    if (row_values(half_row, k0, k1, v)) return;
+    long first_bad = -1;
+    bad[r] += zero_nonfinite(v, std::size_t(k1 - k0), k0, &first_bad);
+    keep_least(bad_first[r], first_bad);
+  }
+  // The scanned piece at image row y: decoded, folded into the range, compressed.
+  void transform(long y, long k0, long k1, float* v, LocalRange::Band& range) const {
+    const std::size_t n = std::size_t(k1 - k0);
+    if (decode) decode(v, n, std::size_t(k0));
+    range.fold(y, k0, k1, v);
+    if (compress) compress(v, n, std::size_t(k0));
+  }
+};
+
 // The Cartesian lattice: each strip handed to the acquisition in pieces of
-// columns, each piece converted, checked, decoded, folded into the local
-// range and compressed on the worker threads while the sums use it.
-NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop, const ValueHook& decode,
-                                  const ValueHook& compress, Acquisition& acquisition,
+// columns, each piece through the stages on the worker threads while the
+// sums use it.
+NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop,
+                                  const SampleStages& stages, Acquisition& acquisition,
                                   LocalRange& local, const BandPartition& bands,
                                   const std::function<void(double)>& progress) {
   const Reading g = plan_reading(in, threads, bands);
   const bool half = g.half;
   const std::size_t row_size = std::size_t(in.width) * in.channels;
   auto add_strip = [&](int, const Strip& s, Acquisition::Band& acq, LocalRange::Band& range,
-                       std::vector<std::atomic<long>>& bad, std::vector<std::atomic<long>>& bad_first) {
+                       SampleStages::Counts& bad, SampleStages::Counts& bad_first) {
     const long y = s.global, y1 = y + s.y1 - s.y0;
     acq.add_rows(y, y1, [&](long gy, long k0, long k1, float* scratch) {
       const long r = gy - y;
       float* v = half ? scratch : s.floats + r * row_size + k0;
-      if (!row_values(half ? s.half + r * row_size : nullptr, k0, k1, v)) {
-        long first_bad = -1;
-        bad[r] += zero_nonfinite(v, std::size_t(k1 - k0), k0, &first_bad);
-        keep_least(bad_first[r], first_bad);
-      }
-      if (decode) decode(v, std::size_t(k1 - k0), std::size_t(k0));
-      range.fold(gy, k0, k1, v);
-      if (compress) compress(v, std::size_t(k1 - k0), std::size_t(k0));
+      stages.scan(half ? s.half + r * row_size : nullptr, r, k0, k1, v, bad, bad_first);
+      stages.transform(gy, k0, k1, v, range);
       return static_cast<const float*>(v);
     });
   };
@@ -396,11 +418,12 @@ NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop, co
                           progress, add_strip);
 }
 
-// The hexagonal lattice: each strip converted and checked, then decoded,
-// folded and compressed, then added whole (HexAcquisition::Band: a
-// coefficient row that two bands reach takes their terms in band order).
-NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop, const ValueHook& decode,
-                                  const ValueHook& compress, HexAcquisition& hexagonal,
+// The hexagonal lattice: each strip through the stages (scanned row by
+// row, then the rest column piece by column piece, on the band's threads),
+// then added whole (HexAcquisition::Band: a coefficient row that two bands
+// reach takes their terms in band order).
+NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop,
+                                  const SampleStages& stages, HexAcquisition& hexagonal,
                                   LocalRange& local, const std::function<void(double)>& progress) {
   const BandPartition& bands = hexagonal.bands();
   const Reading g = plan_reading(in, threads, bands);
@@ -409,7 +432,7 @@ NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop, co
   const int inner = g.workers > 1 ? 1 : threads;  // threads within a band
   std::vector<Buffer<float>> converted(g.workers);  // per worker: a half strip as float
   auto add_strip = [&](int t, const Strip& s, HexAcquisition::Band& acq, LocalRange::Band& range,
-                       std::vector<std::atomic<long>>& bad, std::vector<std::atomic<long>>& bad_first) {
+                       SampleStages::Counts& bad, SampleStages::Counts& bad_first) {
     const long y = s.global, rows = s.y1 - s.y0, y1 = y + rows;
     float* data = s.floats;
     if (half) {
@@ -417,22 +440,12 @@ NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop, co
       data = converted[t].data();
     }
     parallel_for(rows, inner, [&](long r0, long r1) {
-      for (long r = r0; r < r1; ++r) {
-        float* v = data + r * row_size;
-        if (!row_values(half ? s.half + r * row_size : nullptr, 0, long(row_size), v)) {
-          long first_bad = -1;
-          bad[r] = zero_nonfinite(v, row_size, 0, &first_bad);
-          bad_first[r] = first_bad;
-        }
-      }
+      for (long r = r0; r < r1; ++r)
+        stages.scan(half ? s.half + r * row_size : nullptr, r, 0, long(row_size),
+                    data + r * row_size, bad, bad_first);
     });
     parallel_for(long(row_size), inner, [&](long k0, long k1) {
-      for (long r = 0; r < rows; ++r) {
-        float* v = data + r * row_size + k0;
-        if (decode) decode(v, std::size_t(k1 - k0), std::size_t(k0));
-        range.fold(y + r, k0, k1, v);
-        if (compress) compress(v, std::size_t(k1 - k0), std::size_t(k0));
-      }
+      for (long r = 0; r < rows; ++r) stages.transform(y + r, k0, k1, data + r * row_size + k0, range);
     });
     acq.add_rows(y, y1, data);
   };
@@ -513,7 +526,9 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
   // Integer samples tagged sRGB (PNG, JPEG, 8- and 16-bit TIFF) are decoded
   // to linear light first: the method filters radiance, and an 8-bit output
   // encodes again (a flat 128 stays 128).
-  ValueHook decode, compress;
+  SampleStages stages;
+  ValueHook& decode = stages.decode;
+  ValueHook& compress = stages.compress;
   if (in.srgb)
     decode = [&](float* v, std::size_t n, std::size_t k0) {
       for_colour(v, n, [](double x) { return double(srgb_to_linear(float(x))); }, k0);
@@ -530,8 +545,8 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
                                generator, rq.boundary, rq.method);
     Acquisition cartesian(plan, threads);
     p.local_range = std::make_unique<LocalRange>(in.width, in.height, C, W, H, plan.bands().band_rows());
-    bad = acquire_cartesian(in, threads, stop, decode, compress, cartesian, *p.local_range,
-                            plan.bands(), rq.progress);
+    bad = acquire_cartesian(in, threads, stop, stages, cartesian, *p.local_range, plan.bands(),
+                            rq.progress);
     if (!bad.count || !stop) k = cartesian.finish();
   } else {
     // The plan (the weights of every input row and column, some
@@ -543,8 +558,7 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
     HexAcquisition hexagonal(plan, threads);
     p.local_range =
         std::make_unique<LocalRange>(in.width, in.height, C, W, H, hexagonal.bands().band_rows());
-    bad = acquire_hexagonal(in, threads, stop, decode, compress, hexagonal, *p.local_range,
-                            rq.progress);
+    bad = acquire_hexagonal(in, threads, stop, stages, hexagonal, *p.local_range, rq.progress);
     if (!bad.count || !stop) k = hexagonal.finish();
   }
   p.acquire_seconds = seconds_since(t);
