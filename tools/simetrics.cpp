@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "cli.h"
+#include "version.h"
 #include "sis/engine.h"
 #include "sis/imageio.h"
 #include "sis/hex_lattice.h"
@@ -237,7 +238,7 @@ int run(const Options& o) {
       auto f = [K, W, H](double x, double y, int) { return zoneplate(K, W, H, x, y); };
       inner.number("zoneplate_k", K);
       inner.integer("samples_per_pixel", o.samples_per_pixel);
-      inner.number("l2_error", l2_error(k, f, o.samples_per_pixel, double(o.border)));
+      inner.number("l2_error", l2_error(k, f, o.samples_per_pixel, double(o.border), 1, true));
     }
     report.object("continuous", inner);
   }
@@ -300,6 +301,8 @@ int main(int argc, char** argv) {
                  "points per output pixel and axis where the closed form is compared")
       ->check(CLI::PositiveNumber)->capture_default_str();
   app.add_flag("--json", o.json, "print one JSON object instead of 'key value' lines");
+  app.set_version_flag("--version", std::string("simetrics ") + SIS_VERSION + " (git " + SIS_GIT_REVISION + ")",
+                       "print the version and the git revision built");
   if (const auto code = sis::cli::parse(app, argc, argv)) return *code;
   try {
     return run(o);

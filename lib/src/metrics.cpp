@@ -1,5 +1,7 @@
 #include "sis/metrics.h"
 
+#include "sis/parallel.h"
+
 #include <fftw3.h>
 
 #include <algorithm>
@@ -74,7 +76,7 @@ std::vector<std::pair<long, long>> axis_windows(long n_out, long n_in, double r)
 // inside the border; truth(i, j, c) is f at sample (i, j).
 template <typename Truth>
 double l2_on_grid(const Coefficients& k, long ref_w, long ref_h, double border, int threads,
-                  const Truth& truth) {
+                  bool truth_on_any_thread, const Truth& truth) {
   if (k.c.width < 1 || k.c.height < 1 || k.c.channels < 1 || !(k.image_width > 0) ||
       !(k.image_height > 0)) {
     std::ostringstream m;
@@ -91,20 +93,38 @@ double l2_on_grid(const Coefficients& k, long ref_w, long ref_h, double border, 
     const double x = (i + 0.5) * s;
     return x >= border && x <= extent - border;
   };
+  // Each row's sum of squares (on the worker threads where the truth may be
+  // called from any), then the rows' sums in order: the same bits for any
+  // thread count.
+  std::vector<double> rows(ref_h, 0.0);
+  std::vector<long> counts(ref_h, 0);
+  auto row_sums = [&](long j0, long j1) {
+    for (long j = j0; j < j1; ++j) {
+      if (!inside(j, sy, k.image_height)) continue;
+      double row = 0;
+      long n = 0;
+      for (long i = 0; i < ref_w; ++i) {
+        if (!inside(i, sx, k.image_width)) continue;
+        for (int c = 0; c < app.channels; ++c) {
+          const double e = double(app.at(i, j, c)) - truth(i, j, c);
+          row += e * e;
+        }
+        n += app.channels;
+      }
+      rows[j] = row;
+      counts[j] = n;
+    }
+  };
+  if (truth_on_any_thread)
+    parallel_for(ref_h, threads, row_sums);
+  else
+    row_sums(0, ref_h);
   double sum = 0;
   long count = 0;
   for (long j = 0; j < ref_h; ++j) {
-    if (!inside(j, sy, k.image_height)) continue;
-    double row = 0;
-    for (long i = 0; i < ref_w; ++i) {
-      if (!inside(i, sx, k.image_width)) continue;
-      for (int c = 0; c < app.channels; ++c) {
-        const double e = double(app.at(i, j, c)) - truth(i, j, c);
-        row += e * e;
-      }
-      count += app.channels;
-    }
-    sum += row;
+    if (!counts[j]) continue;
+    sum += rows[j];
+    count += counts[j];
   }
   if (count == 0) {
     std::ostringstream m;
@@ -239,12 +259,14 @@ double l2_error(const Coefficients& coefficients, const ImageView& reference,
                                 " channels, the coefficients " +
                                 std::to_string(coefficients.c.channels));
   return l2_on_grid(coefficients, reference.width, reference.height, border_output_pixels, threads,
+                    true,
                     [&](long i, long j, int c) { return double(reference.at(i, j, c)); });
 }
 
 double l2_error(const Coefficients& coefficients,
                 const std::function<double(double x, double y, int channel)>& truth,
-                int samples_per_pixel, double border_output_pixels, int threads) {
+                int samples_per_pixel, double border_output_pixels, int threads,
+                bool truth_on_any_thread) {
   if (samples_per_pixel < 1)
     throw std::invalid_argument("l2_error(): samples_per_pixel " +
                                 std::to_string(samples_per_pixel) + " < 1");
@@ -252,7 +274,7 @@ double l2_error(const Coefficients& coefficients,
   const long ref_w = std::max(1L, std::lround(coefficients.image_width * samples_per_pixel));
   const long ref_h = std::max(1L, std::lround(coefficients.image_height * samples_per_pixel));
   const double sx = coefficients.image_width / ref_w, sy = coefficients.image_height / ref_h;
-  return l2_on_grid(coefficients, ref_w, ref_h, border_output_pixels, threads,
+  return l2_on_grid(coefficients, ref_w, ref_h, border_output_pixels, threads, truth_on_any_thread,
                     [&](long i, long j, int c) { return truth((i + 0.5) * sx, (j + 0.5) * sy, c); });
 }
 

@@ -50,10 +50,12 @@ double l2_error(const Coefficients& coefficients, const ImageView& reference,
 // The same against a closed-form truth f(x, y, channel) (output-pixel
 // coordinates), on a grid of samples_per_pixel x samples_per_pixel points per
 // output pixel placed as the reference samples above. truth is called from
-// the calling thread only.
+// the calling thread only, or from the worker threads at once where
+// truth_on_any_thread (a pure function). The same result either way.
 double l2_error(const Coefficients& coefficients,
                 const std::function<double(double x, double y, int channel)>& truth,
-                int samples_per_pixel, double border_output_pixels = 0, int threads = 1);
+                int samples_per_pixel, double border_output_pixels = 0, int threads = 1,
+                bool truth_on_any_thread = false);
 
 // The closed-form image of scenes/zoneplate.pov with ZP_K = K over a frame
 // of W x H output pixels: 1/2 + 1/2 cos(K ((x/W - 1/2)^2 + (y/H - 1/2)^2)),
