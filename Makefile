@@ -6,6 +6,10 @@
 #   make compare     accuracy against speed, every scene and method: out/report/
 #   make stability   where the methods fail: out/report/stability/
 #   make bench       speed and memory against oiiotool and splineops: out/bench/
+#   make install     build, then install into PREFIX (default /usr/local):
+#                    bin/siproject and bin/simetrics, the library and its
+#                    headers with a CMake package (find_package(sis)), and the
+#                    Python module in lib/pythonX.Y/site-packages
 #   make clean       remove the build folder and out/
 #
 # Variables (make VAR=value):
@@ -84,7 +88,7 @@ ifeq ($(TILES),1)
 endif
 .DELETE_ON_ERROR:
 
-.PHONY: all scene all-scenes setup build test clean FORCE
+.PHONY: all scene all-scenes setup build test install clean FORCE
 .DEFAULT_GOAL := all
 
 all: scene
@@ -103,6 +107,10 @@ build: setup
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+PREFIX ?= /usr/local
+install: build
+	@cmake --install $(BUILD) --prefix $(PREFIX)
 
 clean:
 	rm -rf $(BUILD) $(OUT)

@@ -14,10 +14,11 @@ constexpr int kExitUsage = 2, kExitInput = 3, kExitOutput = 4;
 // Parses the command line. Returns the code to exit with when the run stops
 // here: --help printed (0), or a usage error, reported on stderr as
 // "NAME: what" with a pointer to --help (kExitUsage). Nothing when it goes on.
+// Tools built with version.h give --version: the version and git revision.
 inline std::optional<int> parse(CLI::App& app, int argc, char** argv) {
   try {
     app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
+  } catch (const CLI::Success& e) {  // --help, --version: printed, done
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     std::cerr << app.get_name() << ": " << e.what() << "\n(run " << app.get_name()

@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "cli.h"
+#include "version.h"
 #include "sis/engine.h"
 #include "sis/hex_lattice.h"
 #include "sis/memory.h"
@@ -336,6 +337,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("-v,--verbose", o.verbose, "print sizes and the time of each stage");
   app.add_flag("-q,--quiet", o.quiet, "print nothing but errors");
+  app.set_version_flag("--version", std::string("siproject ") + SIS_VERSION + " (git " + SIS_GIT_REVISION + ")",
+                       "print the version and the git revision built");
   if (const auto code = sis::cli::parse(app, argc, argv)) return *code;
   remove_staged_files_on_signals();
   Settings& st = o.settings;
