@@ -282,7 +282,7 @@ compare: $(if $(PREBUILT),,build)
 	  --scenes '$(COMPARE_SCENES)' --scenedir $(SCENEDIR) --res $(COMPARE_RES) \
 	  --factors '$(COMPARE_FACTORS)' --ref-factor $(COMPARE_REF_FACTOR) --aa '$(COMPARE_AA)' \
 	  --border $(COMPARE_BORDER) --cutoffs '$(CUTOFFS)' --repeats $(COMPARE_REPEATS) \
-	  --zp-nyquist $(ZP_NYQUIST) --siproject $(SIPROJECT) \
+	  --zp-nyquist $(ZP_NYQUIST) \
 	  $(foreach m,$(METHODS),--method '$(m)=$(METHOD_OPTS_$(m))')
 	@$(if $(and $(filter full,$(COMPARE_LABEL)),$(filter $(OUT)/report,$(COMPARE_REPORT))),$(PYTHON) scripts/readme_section.py README.md results $(COMPARE_REPORT)/README-results.md,true)
 # make compare-hex: the hexagonal lattice against the Cartesian one at equal

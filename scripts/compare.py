@@ -5,7 +5,7 @@
                [--factors "1 2 3 4 6 8"] [--ref-factor 32] [--aa "am1-r2 ... am2-r4"]
                [--method NAME='siproject options' ...] [--border 4]
                [--cutoffs "0.125 0.25"] [--show-factor 4] [--repeats 3]
-               [--siproject PATH] [--label full|quick]
+               [--label full|quick]
 
 For every scene (scenes/SCENE.pov):
   renders    POV-Ray through scripts/render.sh, antialiasing off, at every
@@ -18,27 +18,26 @@ For every scene (scenes/SCENE.pov):
              centre ray, n = depth) or +AM2 (recursive corner subdivision,
              a (2^(R-1)+1)^2 grid per pixel), -J; render.sh forces -A but
              passes these after it, and POV-Ray takes the last option given;
-  methods    siproject on every render, every method (the Makefile's
-             METHOD_OPTS_*): the display EXR, the coefficients (--coeffs, one
-             file per distinct approximation: methods that differ only in
-             --display share f_app), and siproject -v "total" (the smallest of
-             REPEATS runs);
-  reference  display: the reference render's pixel averages (siproject
-             --generator box --method conventional at the final size);
-  measures   simetrics' measures, by the Python module (siproject, in this
-             process: each reference read once) per (scene, factor, method):
-             hp shares at CUTOFFS, rms
+  methods    every method (the Makefile's METHOD_OPTS_*, siproject's options)
+             on every render through the Python module siproject, in this
+             process (subprocesses only for POV-Ray): the display EXR, the
+             coefficient file (one per distinct approximation: methods that
+             differ only in --display share f_app), and the projection's time
+             (the render read, projected and resampled), the smallest of
+             REPEATS runs;
+  reference  display: the reference render's pixel averages (box,
+             conventional, at the final size);
+  measures   simetrics' measures, by the module (each reference and render
+             read once) per (scene, factor, method): hp shares at CUTOFFS, rms
              and psnr against the reference display (border BORDER), overshoot
              against the method's own input (the baseline: the reference
              render), continuous L2 error of f_app against the reference
-             render (--truth) or, for the zone plate, its closed form
-             (--zoneplate K). The baseline's f_app is piecewise constant (box).
+             render or, for the zone plate, its closed form. The baseline's
+             f_app is piecewise constant (box).
 
 Every artefact lives in WORK with a JSON sidecar holding what it was made from
-(file digests, options, the tools' digests) and its timings; it is remade only
-when that changes, so renders are never redone for nothing. The binaries are
-copied to a private folder first (a rebuild during the run cannot mix
-versions). Then scripts/report_compare.py writes the report folder (built in a
+(file digests, options, the module's digest) and its timings; it is remade
+only when that changes, so renders are never redone for nothing. Then scripts/report_compare.py writes the report folder (built in a
 temporary folder and renamed into place). Any failure: a message on stderr,
 exit status 1 (2 for usage), no partial file.
 """
@@ -229,11 +228,31 @@ def run(cmd, what):
 TOTAL_RE = re.compile(r"total ([0-9.]+) s")
 
 
-def siproject_total(stderr, what):
-    m = TOTAL_RE.findall(stderr)
-    if not m:
-        raise CompareError(f"{what}: siproject -v printed no 'total N s':\n{stderr.strip()}")
-    return float(m[-1])
+def module_keywords(opts):
+    """siproject's options (the Makefile's METHOD_OPTS_*) as the module's
+    keywords: --name VALUE as name=VALUE, a lone --flag as flag=True."""
+    out, i = {}, 0
+    while i < len(opts):
+        o = opts[i]
+        if not o.startswith("--"):
+            raise CompareError(f"method options {shlex.join(opts)}: '{o}' is not an option")
+        key = o[2:].replace("-", "_")
+        if i + 1 < len(opts) and not opts[i + 1].startswith("--"):
+            value = opts[i + 1]
+            out[key] = float(value) if key in ("density",) else value
+            i += 2
+        else:
+            out[key] = True
+            i += 1
+    return out
+
+
+def engine(call, what, *args, **kwargs):
+    """A call into the module, its errors as CompareError naming WHAT."""
+    try:
+        return call(*args, **kwargs)
+    except (ValueError, OSError, RuntimeError) as e:
+        raise CompareError(f"{what}: {e}")
 
 
 def povray_stats(stderr):
@@ -283,7 +302,6 @@ def parse_args(argv):
     p.add_argument("--repeat-below", type=float, default=3.0,
                    help="renders longer than this many seconds are timed once")
     p.add_argument("--zp-nyquist", type=float, default=0.7)
-    p.add_argument("--siproject", default=os.path.join(ROOT, "build", "tools", "siproject"))
     p.add_argument("--label", default="full", help="names the configuration in the report")
     a = p.parse_args(argv)
 
@@ -340,7 +358,6 @@ def parse_args(argv):
     cfg.zp_nyquist = a.zp_nyquist
     # As the Makefile: ZP_K = ZP_NYQUIST * pi * output width, printed %.6f.
     cfg.zp_k = "%.6f" % (a.zp_nyquist * math.pi * cfg.w)
-    cfg.siproject = os.path.abspath(a.siproject)
     return cfg
 
 
@@ -383,7 +400,7 @@ def aa_label(name):
 class Pipeline:
     def __init__(self, cfg, tools):
         self.cfg = cfg
-        self.tools = tools  # {"siproject": path, "siproject_sha": ..., "module_sha": ...}
+        self.tools = tools  # {"module_sha": the Python module's digest}
         self.digest = Digests(os.path.join(cfg.work, ".digests.json"))
         self.render_sh = os.path.join(HERE, "render.sh")
         self.ini = os.path.join(ROOT, "scenes", "povray.ini")
@@ -451,6 +468,11 @@ class Pipeline:
 
     # -- projections --
     def project(self, scene, factor, method, render, rinfo):
+        """METHOD on RENDER by the Python module, in this process: the float
+        display EXR, the coefficient file of its approximation (one per
+        distinct approximation), and the time of the projection (the render
+        read, projected and resampled: what siproject -v calls total, short of
+        the write), the smallest of REPEATS runs."""
         cfg = self.cfg
         opts = shlex.split(cfg.method_opts[method])
         d = os.path.join(cfg.work, scene, "f" + fmt_factor(factor))
@@ -459,7 +481,7 @@ class Pipeline:
         coeffs = os.path.join(d, method + ".coeffs.exr") if rep else None
         side = os.path.join(d, method + ".json")
         size = f"{cfg.w}x{cfg.h}"
-        stamp = {"schema": SCHEMA, "render": rinfo["digest"], "siproject": self.tools["siproject_sha"],
+        stamp = {"schema": SCHEMA, "render": rinfo["digest"], "engine": self.tools["module_sha"],
                  "size": size, "options": opts, "coeffs": rep}
         outputs = [exr] + ([coeffs] if coeffs else [])
         info = fresh(side, stamp, outputs)
@@ -467,58 +489,58 @@ class Pipeline:
             self.counts["reused"] += 1
             return info
         os.makedirs(d, exist_ok=True)
-        # float output: the measures see the approximation, not half rounding
-        base = [self.tools["siproject"], render, "--size", size, "-d", "float"] + opts
-        what = f"siproject {method} on {rel(render)}"
+        keywords = module_keywords(opts)
+        what = f"{method} on {rel(render)}"
         t_exr = temp_name(exr, ".exr")
         t_coeffs = temp_name(coeffs, ".exr") if coeffs else None
         try:
-            totals, loads, log_text = [], [], ""
+            totals, loads = [], []
             for k in range(cfg.repeats):
-                target = t_exr if k == 0 else os.path.join(self.scratch, "timing.exr")
                 loads.append(load_average())
-                _, err = run(base + ["-o", target, "-v"], what)
-                totals.append(siproject_total(err, what))
-                if k == 0:
-                    log_text = err
+                t0 = time.perf_counter()
+                image = engine(siproject.project, what, render, size=size, **keywords)
+                totals.append(time.perf_counter() - t0)
+            engine(siproject.write_image, what, t_exr, image)
             if coeffs:
-                run(base + ["-o", os.path.join(self.scratch, "coeffs-run.exr"), "--coeffs", t_coeffs, "-q"], what)
+                kept = {k: v for k, v in keywords.items() if k not in ("display", "clamp")}
+                engine(lambda: siproject.coefficients(render, size=size, **kept).save(t_coeffs), what)
             settle(t_exr, exr)
             if coeffs:
                 settle(t_coeffs, coeffs)
         finally:
-            remove(t_exr, *( [t_coeffs] if t_coeffs else []))
+            remove(t_exr, *([t_coeffs] if t_coeffs else []))
         info = {"stamp": stamp, "project_s": min(totals), "project_runs": totals, "load_before": loads,
-                "log": log_text.strip().splitlines(), "digest": self.digest(exr),
-                "coeffs_digest": self.digest(coeffs) if coeffs else None,
-                "command": shlex.join([rel(x) if os.path.isabs(x) else x for x in base])}
+                "digest": self.digest(exr), "coeffs_digest": self.digest(coeffs) if coeffs else None,
+                "command": shlex.join(["siproject", rel(render), "--size", size] + opts)}
         write_json(side, info)
         self.counts["project"] += 1
         say(f"project  {scene:<10} f{fmt_factor(factor):<7} {method:<13} {min(totals):.3f} s")
         return info
 
-    def box_of(self, scene, name, src, srcinfo, extra, coeffs_too):
-        """SRC through siproject box (conventional) at the output size: the
-        reference display, or the baseline's coefficient file (factor 1)."""
+    def box_of(self, scene, name, src, srcinfo, size, coeffs_too):
+        """SRC through box (conventional), by the module: the reference
+        display at the output size, or the baseline's coefficient file at
+        its own size (SIZE None)."""
         cfg = self.cfg
         d = os.path.join(cfg.work, scene, "ref" if name == "ref" else "aa")
         out = os.path.join(d, (name + ".display.exr") if name == "ref" else (name + ".coeffs.exr"))
         side = out[:-4] + ".json"
-        opts = ["--generator", "box", "--method", "conventional", "--display", "centred", "-d", "float"] + extra
-        stamp = {"schema": SCHEMA, "input": srcinfo["digest"], "siproject": self.tools["siproject_sha"],
-                 "options": opts}
+        keywords = dict(generator="box", method="conventional")
+        stamp = {"schema": SCHEMA, "input": srcinfo["digest"], "engine": self.tools["module_sha"],
+                 "size": size, "coefficients": coeffs_too}
         info = fresh(side, stamp, [out])
         if info:
             self.counts["reused"] += 1
             return out, info
         os.makedirs(d, exist_ok=True)
         tmp = temp_name(out, ".exr")
+        what = f"box on {rel(src)}"
         try:
             if coeffs_too:
-                run([self.tools["siproject"], src] + opts + ["-o", os.path.join(self.scratch, "box.exr"),
-                                                              "--coeffs", tmp, "-q"], f"siproject box on {rel(src)}")
+                engine(lambda: siproject.coefficients(src, factor=1, **keywords).save(tmp), what)
             else:
-                run([self.tools["siproject"], src] + opts + ["-o", tmp, "-q"], f"siproject box on {rel(src)}")
+                engine(siproject.write_image, what, tmp,
+                       engine(siproject.project, what, src, size=size, display="centred", **keywords))
             settle(tmp, out)
         finally:
             remove(tmp)
@@ -599,24 +621,15 @@ class Pipeline:
         return int(min(32, max(8, round(self.cfg.ref_factor))))
 
 
-def snapshot_tools(cfg, folder):
+def snapshot_tools(cfg):
+    """The digest of the engine the steps run on (the Python module), and
+    POV-Ray present."""
     tools = {}
-    for name in ("siproject",):
-        src = getattr(cfg, name)
-        if not (os.path.isfile(src) and os.access(src, os.X_OK)):
-            raise CompareError(f"{name} not found or not executable: {src} (run make build, or pass its path)")
-        dst = os.path.join(folder, name)
-        shutil.copy2(src, dst)
-        with open(dst, "rb") as f:
-            tools[name + "_sha"] = hashlib.sha256(f.read()).hexdigest()[:16]
-        tools[name] = dst
-    # the measures' engine: the Python module (build/python, on .venv's path)
     with open(siproject._core.__file__, "rb") as f:
         tools["module_sha"] = hashlib.sha256(f.read()).hexdigest()[:16]
     if shutil.which("povray") is None:
         raise CompareError("povray not found on PATH (run scripts/setup.sh)")
     return tools
-
 
 def number(x):
     return x if isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) else None
@@ -646,7 +659,7 @@ def run_pipeline(cfg, pipe):
         aas = {a: pipe.aa_render(scene, a) for a in cfg.aa}
         ref, refinfo = pipe.render(scene, "f" + fmt_factor(cfg.ref_factor), *render_size(cfg, cfg.ref_factor),
                                    [f"Declare=ZP_K={cfg.zp_k}"] if scene == "zoneplate" else [])
-        refdisp, refdinfo = pipe.box_of(scene, "ref", ref, refinfo, ["--size", f"{cfg.w}x{cfg.h}"], False)
+        refdisp, refdinfo = pipe.box_of(scene, "ref", ref, refinfo, f"{cfg.w}x{cfg.h}", False)
         refs[scene] = {"render": os.path.relpath(ref, cfg.work), "render_s": refinfo["wall_s"],
                        "width": refinfo["width"], "height": refinfo["height"],
                        "display": os.path.relpath(refdisp, cfg.work)}
@@ -680,7 +693,7 @@ def run_pipeline(cfg, pipe):
                 rows.append(row)
         for a in cfg.aa:
             render, rinfo = aas[a]
-            coeffs, cinfo = pipe.box_of(scene, a, render, rinfo, ["--factor", "1"], True)
+            coeffs, cinfo = pipe.box_of(scene, a, render, rinfo, None, True)
             m = pipe.measure(scene, f"aa/{a}", render, rinfo["digest"], refdisp, refdinfo["digest"], ref,
                              refinfo["digest"], coeffs, cinfo["digest"], ref, refinfo["digest"], zp)
             row = {"scene": scene, "kind": "pov-aa", "method": "pov-" + a, "factor": None,
@@ -717,17 +730,13 @@ def main(argv):
     pipe = None
     try:
         os.makedirs(cfg.work, exist_ok=True)
-        bindir = tempfile.mkdtemp(prefix="compare-bin.", dir=cfg.work)
-        try:
-            tools = snapshot_tools(cfg, bindir)
-            pipe = Pipeline(cfg, tools)
-            say(f"compare ({cfg.label}): {len(cfg.scenes)} scene(s), {cfg.w} x {cfg.h}, factors "
-                f"{' '.join(map(fmt_factor, cfg.factors))}, reference factor {fmt_factor(cfg.ref_factor)}, "
-                f"{len(cfg.method_names)} methods, {len(cfg.aa)} POV-Ray baselines; work {rel(cfg.work)}")
-            rows, refs = run_pipeline(cfg, pipe)
-            pipe.close()
-        finally:
-            shutil.rmtree(bindir, ignore_errors=True)
+        tools = snapshot_tools(cfg)
+        pipe = Pipeline(cfg, tools)
+        say(f"compare ({cfg.label}): {len(cfg.scenes)} scene(s), {cfg.w} x {cfg.h}, factors "
+            f"{' '.join(map(fmt_factor, cfg.factors))}, reference factor {fmt_factor(cfg.ref_factor)}, "
+            f"{len(cfg.method_names)} methods, {len(cfg.aa)} POV-Ray baselines; work {rel(cfg.work)}")
+        rows, refs = run_pipeline(cfg, pipe)
+        pipe.close()
         meta = {
             "label": cfg.label, "scenes": cfg.scenes, "width": cfg.w, "height": cfg.h,
             "factors": cfg.factors, "ref_factor": cfg.ref_factor, "aa": cfg.aa,

@@ -745,8 +745,8 @@ def build_html(meta, rows, d, charts, scene_cards, files):
         "<i>Overshoot</i>: how far the display leaves [min, max] of the input samples under each pixel and one "
         "pixel around it (the method's own render; for POV-Ray's antialiasing the reference render). "
         "<i>Time</i>: wall time of scripts/render.sh (POV-Ray, start-up and parse included; smallest of "
-        f"{m['repeats']} runs for renders under {m['repeat_below_s']:g} s) plus siproject -v 'total' (smallest "
-        f"of {m['repeats']} runs); POV-Ray's antialiasing: its render alone. POV-Ray baselines: +A0.0 "
+        f"{m['repeats']} runs for renders under {m['repeat_below_s']:g} s) plus the projection's (the render read, "
+        f"projected and resampled by the engine, in process; smallest of {m['repeats']} runs); POV-Ray's antialiasing: its render alone. POV-Ray baselines: +A0.0 "
         "(threshold 0: every pixel supersampled) with +AM1 (an n x n grid plus the centre ray, n = +R) or +AM2 "
         "(recursive subdivision from the pixel corners: a (2<sup>R&minus;1</sup>+1)<sup>2</sup> grid per pixel), "
         "-J; rays per pixel from POV-Ray's own statistics.</p>")
@@ -895,8 +895,8 @@ def build_html(meta, rows, d, charts, scene_cards, files):
                             ["over", "under", "neg. px"], body))
         H.append("</details>")
     H.append(f"<p class='note'>Made by <code>make compare</code> (scripts/compare.py, scripts/report_compare.py) in "
-             f"{m['pipeline_s']:.0f} s; steps made this run: {esc(json.dumps(m['steps']))}; siproject "
-             f"{esc(m['tools'].get('siproject_sha'))}, measures (Python module) {esc(m['tools'].get('module_sha'))}.</p>")
+             f"{m['pipeline_s']:.0f} s; steps made this run: {esc(json.dumps(m['steps']))}; the Python module "
+             f"{esc(m['tools'].get('module_sha'))}.</p>")
     H.append("</body></html>")
     return "\n".join(H)
 

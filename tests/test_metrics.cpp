@@ -254,6 +254,24 @@ TEST(Metrics, L2ErrorMatchesDirectEvaluation) {
   EXPECT_THROW(l2_error(k, [](double, double, int) { return 0.0; }, 0), std::invalid_argument);
 }
 
+TEST(Metrics, L2ErrorIsTheSameForEveryThreadCount) {
+  // The rows' sums are made on the workers and added in row order: the same
+  // bits for 1, 2 and 7 threads, against a reference and against a pure
+  // closed form called from every thread (or the calling one only).
+  const long N = 20;
+  const Image in = random_image(N * 3, N * 3, 3, 31);
+  const Image reference = random_image(N * 5, N * 5, 3, 32);
+  const Coefficients k = project_with(in, N, N, 3);
+  auto f = [](double x, double y, int c) { return std::sin(x + 0.3 * c) * std::cos(0.7 * y); };
+  const double ref1 = l2_error(k, reference, 1.0, 1);
+  const double fun1 = l2_error(k, f, 4, 1.0, 1, false);
+  for (int threads : {2, 7}) {
+    EXPECT_EQ(l2_error(k, reference, 1.0, threads), ref1) << threads;
+    EXPECT_EQ(l2_error(k, f, 4, 1.0, threads, true), fun1) << threads;
+    EXPECT_EQ(l2_error(k, f, 4, 1.0, threads, false), fun1) << threads;
+  }
+}
+
 TEST(Metrics, OvershootOfAHandMadeOutput) {
   // A checkerboard input in {0, 1} at factor 2: every neighbourhood's range
   // is [0, 1]. One pixel at 1.5, one at -0.25.
