@@ -10,6 +10,9 @@
 #                    bin/siproject and bin/simetrics, the library and its
 #                    headers with a CMake package (find_package(sis)), and the
 #                    Python module in lib/pythonX.Y/site-packages
+#   make docs        refresh the snapshots committed in docs/ from the latest
+#                    reports in out/ (make compare, make bench) and the
+#                    default scene's images (the README's picture)
 #   make clean       remove the build folder and out/
 #
 # Variables (make VAR=value):
@@ -45,6 +48,7 @@ BUILD ?= build
 JOBS  ?= $(shell nproc)
 OUT   ?= out
 
+PYTHON ?= .venv/bin/python
 SCENE  ?= checker
 RES    ?= 1000
 FACTOR ?= 4
@@ -59,7 +63,7 @@ TILES ?= 1
 # siproject options of each method. Every choice is spelled out: siproject's
 # default display for min-error is 2x2, so the plain min-error methods say
 # centred. Box: the normalised average over the pixel, which equals min-error
-# box (DESIGN.md section 3).
+# box (docs/design.md section 3).
 METHOD_OPTS_box          := --generator box --method conventional --display centred
 METHOD_OPTS_conv-tent    := --generator tent --method conventional --display centred
 METHOD_OPTS_me-tent      := --generator tent --method min-error --display centred
@@ -88,7 +92,7 @@ ifeq ($(TILES),1)
 endif
 .DELETE_ON_ERROR:
 
-.PHONY: all scene all-scenes setup build test install clean FORCE
+.PHONY: all scene all-scenes setup build test install docs clean FORCE
 .DEFAULT_GOAL := all
 
 all: scene
@@ -200,6 +204,10 @@ $(OUT)/$(1)/.summary.cmd: FORCE
 $(OUT)/$(1)/summary.txt $(OUT)/$(1)/summary.csv &: $(foreach m,$(METHODS),$(OUT)/$(1)/$(m).exr) scripts/summary.sh $(wildcard $(SIMETRICS)) $(OUT)/$(1)/.summary.cmd
 	@bash scripts/summary.sh --dir $(OUT)/$(1) --render $(call render_of,$(1)) \
 	  --sizes '$(RES_W) $(RES_H) $(RENDER_W) $(RENDER_H)' --simetrics '$(SIMETRICS)' --cutoffs '$(CUTOFFS)' $(METHODS)
+
+# The page of the scene's images side by side, two enlarged crops each, and the summary.
+$(OUT)/$(1)/index.html: $(foreach m,$(METHODS),$(OUT)/$(1)/$(m).png) $(OUT)/$(1)/summary.txt scripts/scene_page.py
+	@$$(PYTHON) scripts/scene_page.py $(OUT)/$(1) $(METHODS)
 endef
 
 # $(call method_rules,SCENE,METHOD): METHOD.exr (float, for the measures), .png (8-bit sRGB) and
@@ -223,11 +231,12 @@ $(foreach s,$(ALL_SCENES),$(eval $(call scene_rules,$(s)))$(foreach m,$(METHODS)
 
 # Without SIPROJECT given, set up and build first (the build brings the
 # default binaries up to date; images depend on them).
-scene: $(if $(PREBUILT),,build) $(call summary_of,$(SCENE))
+scene: $(if $(PREBUILT),,build) $(call summary_of,$(SCENE)) $(OUT)/$(SCENE)/index.html
 	@echo
 	@cat $(call summary_of,$(SCENE))
+	@echo "The images side by side: $(OUT)/$(SCENE)/index.html"
 
-all-scenes: $(if $(PREBUILT),,build) $(foreach s,$(ALL_SCENES),$(call summary_of,$(s)))
+all-scenes: $(if $(PREBUILT),,build) $(foreach s,$(ALL_SCENES),$(call summary_of,$(s)) $(OUT)/$(s)/index.html)
 	@for f in $(filter %/summary.txt,$^); do echo; cat "$$f"; done
 
 endif
@@ -236,7 +245,6 @@ FORCE:
 
 # ---- stability: where the methods fail (scripts/stability.py) -----------------
 # make stability [QUICK=1]: out/report/stability/index.html, charts, JSON, CSV.
-PYTHON ?= .venv/bin/python
 .PHONY: stability
 stability: $(if $(PREBUILT),,build)
 	@$(PYTHON) scripts/stability.py --build $(BUILD) --out $(OUT)/report/stability $(if $(QUICK),--quick)
@@ -284,7 +292,6 @@ compare: $(if $(PREBUILT),,build)
 	  --border $(COMPARE_BORDER) --cutoffs '$(CUTOFFS)' --repeats $(COMPARE_REPEATS) \
 	  --zp-nyquist $(ZP_NYQUIST) \
 	  $(foreach m,$(METHODS),--method '$(m)=$(METHOD_OPTS_$(m))')
-	@$(if $(and $(filter full,$(COMPARE_LABEL)),$(filter $(OUT)/report,$(COMPARE_REPORT))),$(PYTHON) scripts/readme_section.py README.md results $(COMPARE_REPORT)/README-results.md,true)
 # make compare-hex: the hexagonal lattice against the Cartesian one at equal
 # coefficient count (density 1), every scene, factors 2 and 4: $(OUT)/report/hex/.
 .PHONY: compare-hex
@@ -296,14 +303,35 @@ compare-hex:
 # ---- bench: siproject against oiiotool, splineops and the decode floor ---------
 # make bench [QUICK=1]: out/bench/bench.md and bench.csv (scripts/bench.py);
 # the input renders (objects at 8000^2, checker at 16000^2) are made once;
-# the full run also rewrites README.md's Performance section. BENCHFLAGS: more
+# make docs copies the table into docs/performance.md. BENCHFLAGS: more
 # options (--runs 5, --wait-idle 30, --no-big; scripts/bench.py --help).
 BENCHFLAGS ?=
 .PHONY: bench microbench
 bench: $(if $(PREBUILT),,build)
 	@$(PYTHON) scripts/bench.py --build $(BUILD) --outdir $(OUT)/bench --siproject $(SIPROJECT) $(if $(QUICK),--quick) $(BENCHFLAGS)
-	@$(if $(QUICK),true,$(PYTHON) scripts/readme_section.py README.md performance $(OUT)/bench/bench.md 2)
 
 # Google Benchmark microbenchmarks of acquisition, prefilter and resampling.
 microbench: $(if $(PREBUILT),,build)
 	@$(BUILD)/tests/microbench
+
+# ==== docs: the committed snapshots ===========================================
+# make docs: docs/studies.md's results and docs/img/error-vs-time.png from
+# the last full make compare, docs/performance.md's table from the last make
+# bench, docs/img/methods.png (the README's picture) from the default scene's
+# images (make). Only this target writes tracked files; each part is skipped,
+# with a note, when its report is missing.
+.PHONY: docs
+docs:
+	@if [ -f $(OUT)/report/README-results.md ]; then \
+	  $(PYTHON) scripts/readme_section.py docs/studies.md results $(OUT)/report/README-results.md 1 && \
+	  cp $(OUT)/report/compare/charts/error-vs-time.png docs/img/error-vs-time.png && \
+	  echo "docs: docs/studies.md results and docs/img/error-vs-time.png from $(OUT)/report"; \
+	else echo "docs: no $(OUT)/report/README-results.md (run make compare): results left as they are"; fi
+	@if [ -f $(OUT)/bench/bench.md ]; then \
+	  $(PYTHON) scripts/readme_section.py docs/performance.md performance $(OUT)/bench/bench.md 2 && \
+	  echo "docs: docs/performance.md table from $(OUT)/bench/bench.md"; \
+	else echo "docs: no $(OUT)/bench/bench.md (run make bench): table left as it is"; fi
+	@if [ -f $(OUT)/checker/me-cubic-2x2.png ]; then \
+	  $(PYTHON) scripts/docs_picture.py $(OUT)/checker docs/img/methods.png && \
+	  echo "docs: docs/img/methods.png from $(OUT)/checker"; \
+	else echo "docs: no $(OUT)/checker images (run make): picture left as it is"; fi

@@ -1,6 +1,6 @@
 // hdr.pov -- dark surroundings with small, very bright highlights.
 //
-// Exercises: the high-dynamic-range limitation (DESIGN.md section 6). A
+// Exercises: the high-dynamic-range limitation (docs/design.md section 6). A
 // small emitter (radiance 50, about 2 output pixels across at 64 px wide), a
 // tiny one (radiance 1000, under 1 output pixel across at 64 px), sharp
 // specular highlights and mirror images of the emitters (peaks of about 4 to

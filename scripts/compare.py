@@ -493,17 +493,21 @@ class Pipeline:
         what = f"{method} on {rel(render)}"
         t_exr = temp_name(exr, ".exr")
         t_coeffs = temp_name(coeffs, ".exr") if coeffs else None
+        # The coefficients, then the display from them: what project() does
+        # (the same image, bit for bit), with the coefficients kept.
+        kept = {k: v for k, v in keywords.items() if k not in ("display", "clamp")}
+        shown = {k: v for k, v in keywords.items() if k in ("display", "clamp")}
         try:
             totals, loads = [], []
             for k in range(cfg.repeats):
                 loads.append(load_average())
                 t0 = time.perf_counter()
-                image = engine(siproject.project, what, render, size=size, **keywords)
+                approximation = engine(siproject.coefficients, what, render, size=size, **kept)
+                image = engine(approximation.resample, what, size, **shown)
                 totals.append(time.perf_counter() - t0)
             engine(siproject.write_image, what, t_exr, image)
             if coeffs:
-                kept = {k: v for k, v in keywords.items() if k not in ("display", "clamp")}
-                engine(lambda: siproject.coefficients(render, size=size, **kept).save(t_coeffs), what)
+                engine(approximation.save, what, t_coeffs)
             settle(t_exr, exr)
             if coeffs:
                 settle(t_coeffs, coeffs)

@@ -3,7 +3,7 @@
 #
 # Renders SCENE.pov with POV-Ray 3.7 to OUT.exr (OpenEXR, half float, linear),
 # WIDTH x HEIGHT pixels, antialiasing off: one ray through each pixel centre
-# (DESIGN.md sections 2 and 9). Settings come from scenes/povray.ini (through
+# (docs/design.md sections 2 and 9). Settings come from scenes/povray.ini (through
 # POVINI); extra options are passed last and override them, e.g.
 #   scripts/render.sh scenes/zoneplate.pov out/zp.exr 256 256 Declare=ZP_K=201.06
 #

@@ -12,7 +12,7 @@ last; other files of REPORT are left alone):
   equal-rays.csv      best min-error against best conventional, per factor
   baseline.csv        POV-Ray's antialiasing against the cheapest method that
                       matches it
-  README-results.md   the "Results" text proposed for the README
+  README-results.md   the findings' text for docs/studies.md (make docs)
   compare/charts/*.png, compare/img/SCENE/*.png   (swapped in as one folder)
 """
 import csv
@@ -35,7 +35,7 @@ from PIL import Image, ImageDraw  # noqa: E402
 
 from atomic import current_umask  # noqa: E402
 
-# DESIGN.md section 4: the seed's high-pass shares (%), cutoff unpublished.
+# docs/design.md section 4: the seed's high-pass shares (%), cutoff unpublished.
 SEED_HP = {"box": 16.56, "conv-tent": 15.19, "me-tent": 19.18, "mitchell": 15.50,
            "me-cubic": 17.41, "me-tent-2x2": 15.97, "me-cubic-2x2": 16.34}
 SEED_LABEL = {"box": "box", "conv-tent": "conv. tent", "me-tent": "min-error tent",
@@ -582,7 +582,7 @@ def chart_scene(path, meta, rows, scene):
 def chart_hp(path, meta, d):
     methods = [e["method"] for e in d["hp"]]
     x = np.arange(len(methods))
-    series = [("seed (DESIGN.md 4)", [e["seed_percent"] for e in d["hp"]], "0.75")]
+    series = [("seed (docs/design.md 4)", [e["seed_percent"] for e in d["hp"]], "0.75")]
     for i, c in enumerate(meta["cutoffs"]):
         series.append((f"ours, cutoff {c:g} c/px", [None if e[f"ldr_mean@{c:g}"] is None
                                                     else 100 * e[f"ldr_mean@{c:g}"] for e in d["hp"]],
@@ -808,7 +808,7 @@ def build_html(meta, rows, d, charts, scene_cards, files):
                     [pct(e[f"ldr_mean@{c:g}"]) for c in m["cutoffs"]])
     H.append(f"<p class='note'>Share (%) of the displayed luminance's DFT energy above the cutoff (cycles/pixel), "
              f"factor {d['max_factor']:g}; LDR mean over {esc(', '.join(d['ldr_scenes']))}. The seed's numbers "
-             "(1000 x 1000, 256 rays per coefficient, cutoff and scene unpublished) are from DESIGN.md section 4: "
+             "(1000 x 1000, 256 rays per coefficient, cutoff and scene unpublished) are from docs/design.md section 4: "
              "compare the ordering, not the values. Data: <a href='hp.csv'>hp.csv</a>.</p>")
     H.append(table_html(cols, body))
     H.append(f"<img class='chart' src='{charts['hp']}' alt='high-pass shares beside the seed'>")
@@ -914,7 +914,8 @@ def readme_md(meta, d, link_prefix):
              f"are timed and measured. The report, with the images, crops and difference images, is "
              f"`{link_prefix}index.html`; every number is in `{link_prefix}results.csv` and `results.json`.")
     L.append("")
-    L.append(f"![continuous L2 error against time]({link_prefix}{ASSETS}/charts/error-vs-time.png)")
+    # docs/img/: copied there by make docs with this text
+    L.append("![continuous L2 error against time](img/error-vs-time.png)")
     L.append("")
     L.append(f"Continuous L2 error of the approximation f_app against the reference, factor {f:g} "
              f"({f * f:g} rays per pixel), {m['border']}-pixel border left out (2x2 displays share f_app with "
@@ -941,7 +942,7 @@ def readme_md(meta, d, link_prefix):
     L.append("")
     c0 = m["cutoffs"][0]
     L.append(f"High-pass energy share of the displayed image (%), factor {f:g}, mean of "
-             f"{', '.join(d['ldr_scenes'])}, beside the seed's table (DESIGN.md section 4; its cutoff unknown):")
+             f"{', '.join(d['ldr_scenes'])}, beside the seed's table (docs/design.md section 4; its cutoff unknown):")
     L.append("")
     L.append("| method | seed | " + " | ".join(f"ours, > {c:g} c/px" for c in m["cutoffs"]) + " |")
     L.append("| --- | ---: |" + " ---: |" * len(m["cutoffs"]))

@@ -10,6 +10,7 @@ packages=(
   libfftw3-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
   python3 python3-venv python3-pip python3-dev
+  chromium
   time
 )
 

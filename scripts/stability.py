@@ -352,7 +352,7 @@ share their error; a conventional method's f_app is sum p[n] FILTER(x - x_n). Sm
 <img src="sweep.png" alt="error against factor">
 <h2>Noise</h2>
 <p>Seeded white noise (σ = {noise['sigma']}) on the samples of a flat {noise['size']}×{noise['size']} image at factor
-{noise['factor']}; gain = output variance / (σ²/s²), the variance of a pixel's box average. Theory: DESIGN.md
+{noise['factor']}; gain = output variance / (σ²/s²), the variance of a pixel's box average. Theory: docs/design.md
 section 6 (min-error: (1/π)∫|D(ω)|²/A(ω)dω per axis for display transfer D; conventional: s·Σw²/(Σw)² per
 axis) (<a href="noise.csv">noise.csv</a>).</p>
 {table(noise['methods'], ['method', 'gain', 'theory'], {'gain': g, 'theory': g})}

@@ -8,7 +8,7 @@
 #   time   siproject's own "total" from DIR/METHOD.log (siproject -v: read,
 #          acquisition, prefilter, resampling and writing the EXR), seconds;
 #   hp_C   high-pass energy share of DIR/METHOD.exr above cutoff C in
-#          cycles/pixel (DESIGN.md section 8), from `simetrics IMAGE --json
+#          cycles/pixel (docs/design.md section 8), from `simetrics IMAGE --json
 #          --cutoff C ...` (its "hp_C" keys). In the table as a percentage,
 #          in the CSV as the fraction simetrics prints.
 # Without simetrics (not built yet) or when it fails, the high-pass columns

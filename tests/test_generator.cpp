@@ -1,5 +1,5 @@
 // Generators: B-spline identities against a slow direct formula, the values
-// of DESIGN.md section 3, and the conventional filters' definitions.
+// of docs/design.md section 3, and the conventional filters' definitions.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Three-directional box splines (DESIGN.md section 7): the piecewise
+// Three-directional box splines (docs/design.md section 7): the piecewise
 // polynomial form against the closed form of the hat, the slow exact integral
 // and a direct convolution; partition of unity, support, symmetry; the
 // autocorrelation on the lattice and its condition number.
@@ -221,7 +221,7 @@ TEST(BoxSpline, AutocorrelationOnTheLattice) {
 }
 
 TEST(BoxSpline, ConditionNumbers) {
-  // DESIGN.md: 4 for the hat (A = 1/2 + (cos w1 + cos w2 + cos(w2 - w1))/6,
+  // docs/design.md: 4 for the hat (A = 1/2 + (cos w1 + cos w2 + cos(w2 - w1))/6,
   // from 1 at 0 down to 1/4 at the K points); about 52 for the quartic.
   // Both extremes sit at 0 and K = (2 pi/3, -2 pi/3).
   const BoxSpline& hat = BoxSpline::hexagonal(1);

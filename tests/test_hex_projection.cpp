@@ -1,4 +1,4 @@
-// The hexagonal lattice end to end in the library (DESIGN.md section 7):
+// The hexagonal lattice end to end in the library (docs/design.md section 7):
 // lattice and layout, acquisition against a slow direct sum, polynomial
 // reproduction, approximation order, the seam of the periodic grid, the
 // quadrature of square samples, and the display modes against direct

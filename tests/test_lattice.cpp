@@ -1,4 +1,4 @@
-// Lattice and coordinate conventions (DESIGN.md section 2).
+// Lattice and coordinate conventions (docs/design.md section 2).
 #include <gtest/gtest.h>
 
 #include <cmath>

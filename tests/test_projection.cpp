@@ -1,5 +1,5 @@
 // Acquisition, projection and resampling: against slow direct sums, and the
-// identities of the orthogonal projection (DESIGN.md sections 2 to 5).
+// identities of the orthogonal projection (docs/design.md sections 2 to 5).
 #include <gtest/gtest.h>
 
 #include <atomic>

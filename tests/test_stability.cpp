@@ -1,4 +1,4 @@
-// Where the method fails, measured (DESIGN.md section 6): noise gain against
+// Where the method fails, measured (docs/design.md section 6): noise gain against
 // theory, the step response's overshoot, and the range remedies.
 #include <gtest/gtest.h>
 
@@ -134,7 +134,7 @@ TEST(LocalRange, MatchesBruteForceAtAnyRatio) {
 TEST(Noise, GainMatchesTheory) {
   // Seeded white noise of variance sigma^2 on the samples of a constant
   // image. Gains are relative to sigma^2 / s^2, the variance of a box
-  // average of the s^2 samples of a pixel. Theory (DESIGN.md section 6), per
+  // average of the s^2 samples of a pixel. Theory (docs/design.md section 6), per
   // axis, squared for 2-D: min-error coefficients a^{-1}[0] = mean(1/A_d);
   // centred display mean(B_d^2 / A_d) with B_d the display taps' transform;
   // conventional tent (integral tent^2) / (integral tent)^2 = 2/3.

@@ -1,9 +1,10 @@
-// simetrics: the measures of DESIGN.md section 8 for one final image, for the
+// simetrics: the measures of docs/design.md section 8 for one final image, for the
 // comparison scripts: high-pass energy share, RMS / PSNR against a reference,
 // overshoot of the supersampled input's local range.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <thread>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -234,11 +235,11 @@ int run(const Options& o) {
       inner.integer("truth_height", truth.height);
       inner.number("l2_error", l2_error(k, truth, double(o.border)));
     } else {
-      const double K = o.zoneplate, W = k.image_width, H = k.image_height;
-      auto f = [K, W, H](double x, double y, int) { return zoneplate(K, W, H, x, y); };
+      const double K = o.zoneplate;
       inner.number("zoneplate_k", K);
       inner.integer("samples_per_pixel", o.samples_per_pixel);
-      inner.number("l2_error", l2_error(k, f, o.samples_per_pixel, double(o.border), 1, true));
+      inner.number("l2_error", zoneplate_l2_error(k, K, o.samples_per_pixel, double(o.border),
+                                                  int(std::max(1u, std::thread::hardware_concurrency()))));
     }
     report.object("continuous", inner);
   }
@@ -252,7 +253,7 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   Options o;
   CLI::App app{
-      "simetrics: measures of one final image (DESIGN.md section 8).\n"
+      "simetrics: measures of one final image (docs/design.md section 8).\n"
       "  hp_C: share of the luminance's DFT energy (mean removed) at radial\n"
       "        frequency strictly above C cycles/pixel, over the whole image;\n"
       "  rms, psnr: against --reference, same size, inside the --border band;\n"

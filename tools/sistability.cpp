@@ -1,9 +1,9 @@
 // sistability: where the methods fail, measured on synthetic inputs with
-// known answers (DESIGN.md section 6), as JSON for the report:
+// known answers (docs/design.md section 6), as JSON for the report:
 //   noise     output noise variance over input noise variance per method and
 //             display, seeded white noise on the samples of a flat image, in
 //             units of sigma^2 / s^2 (a box average of a pixel's s^2 rays),
-//             with the theory of DESIGN.md section 6 beside it;
+//             with the theory of docs/design.md section 6 beside it;
 //   step      overshoot and undershoot of a unit step edge per method;
 //   numerics  per degree 0..7: condition numbers, how much the prefilter
 //             amplifies a float rounding of its input, FFT against recursive.

@@ -348,6 +348,32 @@ OvershootReport overshoot(const ImageView& output, const ImageView& input,
   return r;
 }
 
+double zoneplate_l2_error(const Coefficients& coefficients, double K, int samples_per_pixel,
+                          double border_output_pixels, int threads) {
+  if (samples_per_pixel < 1)
+    throw std::invalid_argument("l2_error(): samples_per_pixel " +
+                                std::to_string(samples_per_pixel) + " < 1");
+  const double W = coefficients.image_width, H = coefficients.image_height;
+  const long ref_w = std::max(1L, std::lround(W * samples_per_pixel));
+  const long ref_h = std::max(1L, std::lround(H * samples_per_pixel));
+  const double sx = W / ref_w, sy = H / ref_h;
+  // phase K (u - 1/2)^2 of each column, K (v - 1/2)^2 of each row
+  auto table = [K](long n, double s, double extent, std::vector<double>& c, std::vector<double>& si) {
+    c.resize(n);
+    si.resize(n);
+    for (long i = 0; i < n; ++i) {
+      const double u = (i + 0.5) * s / extent - 0.5, a = K * u * u;
+      c[i] = std::cos(a);
+      si[i] = std::sin(a);
+    }
+  };
+  std::vector<double> cx, sx_, cy, sy_;
+  table(ref_w, sx, W, cx, sx_);
+  table(ref_h, sy, H, cy, sy_);
+  return l2_on_grid(coefficients, ref_w, ref_h, border_output_pixels, threads, true,
+                    [&](long i, long j, int) { return 0.5 + 0.5 * (cx[i] * cy[j] - sx_[i] * sy_[j]); });
+}
+
 double zoneplate(double K, double W, double H, double x, double y) {
   const double u = x / W - 0.5, v = y / H - 0.5;
   return 0.5 + 0.5 * std::cos(K * (u * u + v * v));

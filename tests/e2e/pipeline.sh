@@ -8,7 +8,7 @@
 #   - sizes: the render is 256 x 256, every EXR and PNG 64 x 64;
 #   - every EXR is finite (oiiotool --stats: no NaN, no Inf);
 #   - min-error tent has a larger high-pass share than conventional tent at
-#     both summary cutoffs (DESIGN.md section 4: the seed's ordering);
+#     both summary cutoffs (docs/design.md section 4: the seed's ordering);
 #   - make's dependencies: a second run redoes nothing; a new FACTOR
 #     re-renders and re-projects; going back re-projects from the render
 #     already there; changed options of one method redo only that method;
@@ -64,6 +64,19 @@ mk "$tmp/run1.log" scene || { cat "$tmp/run1.log" >&2; die "make failed"; }
 [ "$(count render "$tmp/run1.log")" -eq 1 ] || fail "first run: expected one render"
 [ "$(count project "$tmp/run1.log")" -eq ${#methods[@]} ] || fail "first run: expected ${#methods[@]} projections"
 grep -q '^method ' "$tmp/run1.log" || fail "first run printed no summary table"
+
+# The scene's page: every image it names loads in a real browser (headless
+# Chromium; the page marks how many loaded once the load event has fired).
+page=$out/checker/index.html
+if [ -f "$page" ]; then
+  loaded=$(timeout 120 chromium --headless --no-sandbox --disable-gpu --virtual-time-budget=5000 \
+             --dump-dom "file://$page" 2>/dev/null | grep -o 'data-loaded="[^"]*"' || true)
+  want=$(grep -o '<img ' "$page" | wc -l)  # each image and its crops (one at 64 x 64)
+  [ "$want" -ge $(( ${#methods[@]} * 2 )) ] || fail "$page names $want images, fewer than an image and a crop per method"
+  [ "$loaded" = "data-loaded=\"$want of $want\"" ] || fail "$page: images loaded: ${loaded:-none reported} (expected $want of $want)"
+else
+  fail "no $page"
+fi
 
 render=$out/render/checker-64-f4.exr
 files=("$render")

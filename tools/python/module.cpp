@@ -334,19 +334,9 @@ PYBIND11_MODULE(_core, m) {
         py::gil_scoped_release free;
         return l2_error(c.k, ref, border, c.threads);
       }
-      const double K = *zone_k, W = c.k.image_width, H = c.k.image_height;
+      const double K = *zone_k;
       py::gil_scoped_release free;
-      // every channel alike: each thread keeps its last point's value (keyed
-      // by the plate and the frame too: the cache outlives the call)
-      auto truth = [&](double x, double y, int) {
-        thread_local double key[5] = {NAN, NAN, NAN, NAN, NAN}, last = 0;
-        if (x != key[0] || y != key[1] || K != key[2] || W != key[3] || H != key[4]) {
-          key[0] = x, key[1] = y, key[2] = K, key[3] = W, key[4] = H;
-          last = zoneplate(K, W, H, x, y);
-        }
-        return last;
-      };
-      return l2_error(c.k, truth, samples_per_pixel, border, c.threads, true);
+      return zoneplate_l2_error(c.k, K, samples_per_pixel, border, c.threads);
     });
   });
   m.def("_overshoot", [](FloatArray output, FloatArray input, double neighbourhood,

@@ -1,6 +1,6 @@
 #pragma once
 // Three-directional box splines, the generators of the hexagonal lattice
-// (DESIGN.md section 7).
+// (docs/design.md section 7).
 //
 // Lattice coordinates u = L^{-1} (x - x_n): on the hexagonal lattice the
 // directions e1 = (1, 0), e2 = (1/2, sqrt(3)/2) and e3 = e2 - e1 are (1, 0),

@@ -1,5 +1,5 @@
 #pragma once
-// Coefficients on the hexagonal lattice (DESIGN.md section 7): storage,
+// Coefficients on the hexagonal lattice (docs/design.md section 7): storage,
 // placement on the frame, boundary rule, and how Coefficients records them.
 //
 // Storage: offset rows. Stored coefficient (i, j) of a columns x rows grid

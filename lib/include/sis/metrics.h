@@ -1,5 +1,5 @@
 #pragma once
-// Measures of a result (DESIGN.md section 8): high-pass energy share,
+// Measures of a result (docs/design.md section 8): high-pass energy share,
 // differences against a reference, the continuous L2 error of an
 // approximation, and overshoot of the input's local range. Sums run in
 // double precision. Units are output pixels; pixel (i, j) covers
@@ -62,6 +62,13 @@ double l2_error(const Coefficients& coefficients,
 // every channel alike (a truth for l2_error).
 double zoneplate(double K, double W, double H, double x, double y);
 
+// l2_error against zoneplate(K, ...) over the coefficients' frame, on the
+// grid of samples_per_pixel^2 points per output pixel: the plate's phase is
+// a sum of a column's and a row's, so the truth is cos a cos b - sin a sin b
+// from one table per axis (equal to the direct form to a few ulps).
+double zoneplate_l2_error(const Coefficients& coefficients, double K, int samples_per_pixel,
+                          double border_output_pixels = 0, int threads = 1);
+
 struct OvershootOptions {
   // The input samples "under" output pixel (i, j) are those whose position
   // falls in [i - r, i + 1 + r) x [j - r, j + 1 + r), r = neighbourhood in
@@ -89,7 +96,7 @@ struct OvershootReport {
 };
 
 // How far an output leaves the range of the input samples under it
-// (DESIGN.md sections 6 and 8), channel by channel. Output and input cover
+// (docs/design.md sections 6 and 8), channel by channel. Output and input cover
 // the same frame: input sample (k, l) sits at ((k + 1/2) W / W_in,
 // (l + 1/2) H / H_in) in the output's pixels, any ratio per axis. The
 // channel counts must match.

@@ -1,6 +1,6 @@
 #pragma once
 // Digital prefilter: c = r * a^{-1}, with a[k] = <phi, phi(. - k)> the
-// autocorrelation of the B-spline generator (DESIGN.md section 3). In 2-D the
+// autocorrelation of the B-spline generator (docs/design.md section 3). In 2-D the
 // spectrum factors, A(w1, w2) = A_d(w1) A_d(w2), so the prefilter runs as
 // 1-D passes along rows then columns.
 //   mirror:   DCT-II, divide by A_d(pi k / n), DCT-III; each DCT of length n

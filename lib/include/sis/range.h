@@ -1,6 +1,6 @@
 #pragma once
 // Range control, opt-in remedies for what the orthogonal projection does to
-// the range of an image (DESIGN.md section 6), each reported, never hidden:
+// the range of an image (docs/design.md section 6), each reported, never hidden:
 // - highlight compression: OpenImageIO's odd-symmetric log curve (identity
 //   below 0.18) applied to the samples before projecting, inverted after;
 // - clamps of the displayed samples: at zero, or to the min/max of the input
