@@ -503,7 +503,10 @@ class Pipeline:
                 loads.append(load_average())
                 t0 = time.perf_counter()
                 approximation = engine(siproject.coefficients, what, render, size=size, **kept)
-                image = engine(approximation.resample, what, size, **shown)
+                if shown.get("clamp") == "local":  # needs the samples: the whole projection again
+                    image = engine(siproject.project, what, render, size=size, **keywords)
+                else:
+                    image = engine(approximation.resample, what, size, **shown)
                 totals.append(time.perf_counter() - t0)
             engine(siproject.write_image, what, t_exr, image)
             if coeffs:
