@@ -328,7 +328,7 @@ def median_stages(c):
 
 # ---- thread invariance and the microbenchmark ------------------------------------
 
-def identical_pixels(python, a, b):
+def identical_pixels(a, b):
     """True when the two images have the same size, channels and bit-identical
     pixels (read by the Python module: half samples widen to float exactly)."""
     try:
@@ -654,7 +654,7 @@ def main():
 
         t1 = next(c for c in comps if c["name"].endswith("--threads 1"))
         t2 = next(c for c in comps if c["name"].endswith("--threads 2"))
-        identical = identical_pixels(args.python, os.path.join(work, "threads-1.exr"),
+        identical = identical_pixels(os.path.join(work, "threads-1.exr"),
                                      os.path.join(work, "threads-2.exr"))
         log(f"--threads 1 and --threads 2 outputs {'bit-identical' if identical else 'DIFFER'}")
 

@@ -50,8 +50,12 @@ def main():
         sheet.paste(Image.fromarray(crop), (i * (tile + 4), CAPTION))
         draw.text((i * (tile + 4) + 4, 4), label, fill="black")
     tmp = out + ".tmp.png"
-    sheet.save(tmp, optimize=True)
-    os.replace(tmp, out)
+    try:
+        sheet.save(tmp, optimize=True)
+        os.replace(tmp, out)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
 
 
 if __name__ == "__main__":

@@ -43,8 +43,12 @@ def windows(score, size, count=2):
 
 def save(img, path):
     tmp = path + ".tmp.png"
-    img.save(tmp, optimize=True)
-    os.replace(tmp, path)
+    try:
+        img.save(tmp, optimize=True)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
 
 
 def main():
@@ -96,9 +100,13 @@ window.addEventListener("load", function () {{
 </script></body></html>
 """
     tmp = os.path.join(folder, ".index.html.tmp")
-    with open(tmp, "w") as f:
-        f.write(page)
-    os.replace(tmp, os.path.join(folder, "index.html"))
+    try:
+        with open(tmp, "w") as f:
+            f.write(page)
+        os.replace(tmp, os.path.join(folder, "index.html"))
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
 
 
 if __name__ == "__main__":

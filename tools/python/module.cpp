@@ -6,7 +6,6 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <memory>
@@ -88,37 +87,6 @@ int resolved_threads(int threads) {
   return translated(false, [&] { return resolve(s).threads; });
 }
 
-// The settings of project() and coefficients(): the keywords as siproject's
-// options (None: not given).
-Settings settings_of(const std::string& size, std::optional<double> factor,
-                     const std::string& factor_spelling, std::optional<std::string> generator,
-                     std::optional<std::string> method, const std::string& display,
-                     const std::string& boundary, const std::string& lattice,
-                     std::optional<double> density, const std::string& density_spelling,
-                     std::optional<std::string> quadrature, const std::string& nonfinite,
-                     const std::string& prefilter, const std::string& clamp,
-                     bool highlight_compress, int threads) {
-  Settings s;
-  s.size = size;
-  s.factor = factor;
-  s.factor_spelling = factor_spelling;
-  if (generator) s.generator = *generator, s.generator_given = true;
-  if (method) s.method = *method, s.method_given = true;
-  s.display = display;
-  s.boundary = boundary;
-  s.boundary_given = boundary != "mirror";
-  s.lattice = lattice;
-  s.lattice_given = lattice != "cartesian";
-  if (density) s.density = *density, s.density_given = true, s.density_spelling = density_spelling;
-  if (quadrature) s.quadrature = *quadrature, s.quadrature_given = true;
-  s.nonfinite = nonfinite;
-  s.prefilter = prefilter;
-  s.clamp = clamp;
-  s.highlight_compress = highlight_compress;
-  s.threads = threads;
-  return s;
-}
-
 // Runs form() on a path or an array (float32 or float16, C-contiguous,
 // (H, W, C): the caller's wrapper makes it so), the GIL released.
 // Returns (image or None, coefficients or None, warnings).
@@ -164,6 +132,37 @@ py::tuple run_form(py::object input, const Settings& s, bool coefficients_only) 
     k->threads = r.threads;
     return py::make_tuple(py::none(), py::cast(std::move(k)), warnings);
   });
+}
+
+// _form: project() and coefficients() with their keywords as siproject's
+// options (None: not given).
+py::tuple form_with(py::object input, const std::string& size, std::optional<double> factor,
+                    const std::string& factor_spelling, std::optional<std::string> generator,
+                    std::optional<std::string> method, const std::string& display,
+                    const std::string& boundary, const std::string& lattice,
+                    std::optional<double> density, const std::string& density_spelling,
+                    std::optional<std::string> quadrature, const std::string& nonfinite,
+                    const std::string& prefilter, const std::string& clamp,
+                    bool highlight_compress, int threads, bool coefficients_only) {
+  Settings s;
+  s.size = size;
+  s.factor = factor;
+  s.factor_spelling = factor_spelling;
+  if (generator) s.generator = *generator, s.generator_given = true;
+  if (method) s.method = *method, s.method_given = true;
+  s.display = display;
+  s.boundary = boundary;
+  s.boundary_given = boundary != "mirror";
+  s.lattice = lattice;
+  s.lattice_given = lattice != "cartesian";
+  if (density) s.density = *density, s.density_given = true, s.density_spelling = density_spelling;
+  if (quadrature) s.quadrature = *quadrature, s.quadrature_given = true;
+  s.nonfinite = nonfinite;
+  s.prefilter = prefilter;
+  s.clamp = clamp;
+  s.highlight_compress = highlight_compress;
+  s.threads = threads;
+  return run_form(input, s, coefficients_only);
 }
 
 PyCoefficients load_file(const std::string& path, bool zero_nonfinite, int threads) {
@@ -293,19 +292,7 @@ PYBIND11_MODULE(_core, m) {
       .def("_evaluate", &evaluate_at)
       .def("_resample", &resample_to)
       .def("_save", &save_to);
-  m.def("_form", [](py::object input, const std::string& size, std::optional<double> factor,
-                    const std::string& factor_spelling, std::optional<std::string> generator,
-                    std::optional<std::string> method, const std::string& display,
-                    const std::string& boundary, const std::string& lattice,
-                    std::optional<double> density, const std::string& density_spelling,
-                    std::optional<std::string> quadrature, const std::string& nonfinite,
-                    const std::string& prefilter, const std::string& clamp,
-                    bool highlight_compress, int threads, bool coefficients_only) {
-    const Settings s = settings_of(size, factor, factor_spelling, generator, method, display, boundary,
-                                   lattice, density, density_spelling, quadrature, nonfinite,
-                                   prefilter, clamp, highlight_compress, threads);
-    return run_form(input, s, coefficients_only);
-  });
+  m.def("_form", &form_with);
   m.def("_load", &load_file);
   m.def("_highpass_shares", [](FloatArray a, std::vector<double> cutoffs) {
     const ImageView im = view_of(a, "highpass_share()");
