@@ -9,6 +9,7 @@
 #include <random>
 
 #include "sis/metrics.h"
+#include "sis/hex_projection.h"
 #include "sis/projection.h"
 #include "support.h"
 
@@ -222,71 +223,152 @@ TEST(Metrics, L2ErrorOfTentOnARampAwayFromTheBorder) {
               std::sqrt(5.0) / 80 * std::sqrt((m * m - 1) / (12 * m * m)), 1e-6);
 }
 
-TEST(Metrics, L2ErrorMatchesDirectEvaluation) {
-  // Any reference: RMS of evaluate() - reference at the reference's sample
-  // positions, inside the border, against l2_error (which goes through
-  // resample's float output: relative 1e-7).
-  const long N = 12;
-  const Image in = random_image(N * 3, N * 2, 2, 21);
-  const Image reference = random_image(5 * N, 4 * N, 2, 22);  // factors 5 and 4
-  for (int d : {1, 3})
-    for (double border : {0.0, 1.5}) {
-      const Coefficients k = project_with(in, N, N, d);
-      double sum = 0;
-      long count = 0;
-      for (long j = 0; j < reference.height; ++j)
-        for (long i = 0; i < reference.width; ++i) {
-          const double x = (i + 0.5) * N / reference.width, y = (j + 0.5) * N / reference.height;
-          if (x < border || x > N - border || y < border || y > N - border) continue;
-          for (int c = 0; c < 2; ++c) {
-            const double e = evaluate(k, {x, y}, c) - reference.at(i, j, c);
-            sum += e * e;
-            ++count;
-          }
-        }
-      const double direct = std::sqrt(sum / count);
-      EXPECT_NEAR(l2_error(k, reference, border, 2), direct, 1e-6 * direct) << d << " " << border;
+// The slow direct reference of every l2_error: f_app by evaluate() (double
+// precision, coefficient by coefficient) at each sample position inside the
+// border, against truth(i, j, c) at sample (i, j) of a ref_w x ref_h grid.
+double direct_l2(const Coefficients& k, long ref_w, long ref_h, double border,
+                 const std::function<double(long, long, int)>& truth) {
+  double sum = 0;
+  long count = 0;
+  for (long j = 0; j < ref_h; ++j)
+    for (long i = 0; i < ref_w; ++i) {
+      const double x = (i + 0.5) * k.image_width / ref_w, y = (j + 0.5) * k.image_height / ref_h;
+      if (x < border || x > k.image_width - border || y < border || y > k.image_height - border)
+        continue;
+      for (int c = 0; c < k.c.channels; ++c) {
+        const double e = evaluate(k, {x, y}, c) - truth(i, j, c);
+        sum += e * e;
+        ++count;
+      }
     }
-  const Coefficients k = project_with(in, N, N, 1);
+  return std::sqrt(sum / count);
+}
+
+// Coefficients with random values in a Cartesian space of any generator,
+// step and boundary rule: the sums of the Cartesian route against the
+// direct evaluation, away from any projection.
+Coefficients random_coefficients(long w, long h, int channels, Kernel g, double hx, double hy,
+                                 Boundary b, unsigned seed) {
+  Coefficients k;
+  k.c = Grid<double>(w, h, channels);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-0.2, 1.2);
+  for (double& v : k.c.data) v = u(rng);
+  k.lattice = Lattice::cartesian(hx, hy);
+  k.generator = g;
+  k.boundary = b;
+  k.image_width = w * hx;
+  k.image_height = h * hy;
+  return k;
+}
+
+TEST(Metrics, L2ErrorMatchesDirectEvaluation) {
+  // The Cartesian route (the Gram matrices, the acquired reference and the
+  // reference's energy, all in double) against evaluate() at each sample:
+  // the two differ only in the order of the double sums, so by a few ulps
+  // of sum f^2 relative to sum (f_app - f)^2 (here about 0.3 against 0.5
+  // for random data): 1e-12 relative. Generators of every kind and width,
+  // steps that are not the output pixel's, both boundary rules (reached
+  // with border 0), non-integer factors.
+  const Image reference = random_image(53, 38, 2, 22);
+  struct Case {
+    Kernel g;
+    double hx, hy;
+    Boundary b;
+  };
+  const Case cases[] = {{Kernel::bspline(0), 1, 1, Boundary::Mirror},
+                        {Kernel::bspline(1), 1, 1, Boundary::Periodic},
+                        {Kernel::bspline(3), 0.5, 0.75, Boundary::Mirror},
+                        {Kernel::bspline(5), 1, 1, Boundary::Periodic},
+                        {Kernel::mitchell(), 1.5, 1, Boundary::Mirror},
+                        {Kernel::lanczos(3), 1, 1, Boundary::Mirror}};
+  for (const Case& t : cases)
+    for (double border : {0.0, 1.5}) {
+      const Coefficients k = random_coefficients(long(12 / t.hx), long(9 / t.hy), 2, t.g, t.hx, t.hy,
+                                                 t.b, 7);
+      const double direct = direct_l2(k, reference.width, reference.height, border,
+                                      [&](long i, long j, int c) { return reference.at(i, j, c); });
+      const std::string what = t.g.name() + " " + boundary_name(t.b) + " border " + std::to_string(border);
+      EXPECT_NEAR(l2_error(k, reference, border, 2), direct, 1e-12 * direct) << what;
+      auto f = [](double x, double y, int c) { return std::sin(x + 0.3 * c) * std::cos(0.7 * y); };
+      const double direct_f = direct_l2(k, 12 * 4, 9 * 4, border, [&](long i, long j, int c) {
+        return f((i + 0.5) / 4, (j + 0.5) / 4, c);
+      });
+      EXPECT_NEAR(l2_error(k, f, 4, border, 2), direct_f, 1e-12 * direct_f) << what;
+    }
+  const Coefficients k = project_with(random_image(36, 24, 2, 21), 12, 12, 1);
   EXPECT_THROW(l2_error(k, random_image(10, 10, 1, 1)), std::invalid_argument);  // channels
   EXPECT_THROW(l2_error(k, reference, 6.5), std::invalid_argument);  // nothing left
   EXPECT_THROW(l2_error(k, reference, -1.0), std::invalid_argument);
   EXPECT_THROW(l2_error(k, [](double, double, int) { return 0.0; }, 0), std::invalid_argument);
 }
 
+TEST(Metrics, L2ReferenceGivesL2ErrorsBitsForManyApproximations) {
+  // One reference, approximations in three Cartesian spaces met twice each
+  // (the second time from the kept acquisition) and one hexagonal one: each
+  // error has the bits of l2_error on its own, for 1 and 3 threads.
+  const long N = 16;
+  const Image in = random_image(N * 3, N * 3, 3, 51);
+  const Image reference = random_image(N * 5, N * 5, 3, 52);
+  std::vector<Coefficients> ks;
+  for (int round = 0; round < 2; ++round)
+    for (int d : {0, 1, 3}) ks.push_back(project_with(random_image(N * 3, N * 3, 3, 53 + round), N, N, d));
+  HexProjectionOptions ho;
+  ks.push_back(project_hexagonal(in, double(N), double(N), ho));
+  for (int threads : {1, 3}) {
+    L2Reference ref(reference, 2.0, threads);
+    for (const Coefficients& k : ks) EXPECT_EQ(ref.l2_error(k), l2_error(k, reference, 2.0, 1));
+  }
+  EXPECT_THROW(L2Reference(reference, -1.0), std::invalid_argument);
+  L2Reference ref(reference, 8.5);
+  EXPECT_THROW(ref.l2_error(ks[0]), std::invalid_argument);  // the border leaves nothing
+}
+
 TEST(Metrics, L2ErrorIsTheSameForEveryThreadCount) {
-  // The rows' sums are made on the workers and added in row order: the same
-  // bits for 1, 2 and 7 threads, against a reference and against a pure
-  // closed form called from every thread (or the calling one only).
+  // The reference's rows are acquired on the workers and added in row
+  // order: the same bits for 1, 2 and 7 threads, against a reference and
+  // against a pure closed form called from every thread (or the calling one
+  // only); the hexagonal space's direct evaluation likewise.
   const long N = 20;
   const Image in = random_image(N * 3, N * 3, 3, 31);
   const Image reference = random_image(N * 5, N * 5, 3, 32);
-  const Coefficients k = project_with(in, N, N, 3);
   auto f = [](double x, double y, int c) { return std::sin(x + 0.3 * c) * std::cos(0.7 * y); };
-  const double ref1 = l2_error(k, reference, 1.0, 1);
-  const double fun1 = l2_error(k, f, 4, 1.0, 1, false);
-  for (int threads : {2, 7}) {
-    EXPECT_EQ(l2_error(k, reference, 1.0, threads), ref1) << threads;
-    EXPECT_EQ(l2_error(k, f, 4, 1.0, threads, true), fun1) << threads;
-    EXPECT_EQ(l2_error(k, f, 4, 1.0, threads, false), fun1) << threads;
+  HexProjectionOptions ho;
+  for (const Coefficients& k : {project_with(in, N, N, 3), project_hexagonal(in, double(N), double(N), ho)}) {
+    const double ref1 = l2_error(k, reference, 1.0, 1);
+    const double fun1 = l2_error(k, f, 4, 1.0, 1, false);
+    for (int threads : {2, 7}) {
+      EXPECT_EQ(l2_error(k, reference, 1.0, threads), ref1) << threads;
+      EXPECT_EQ(l2_error(k, f, 4, 1.0, threads, true), fun1) << threads;
+      EXPECT_EQ(l2_error(k, f, 4, 1.0, threads, false), fun1) << threads;
+    }
   }
 }
 
 TEST(Metrics, ZoneplateL2ErrorEqualsTheDirectClosedForm) {
-  // The separable form (cos a cos b - sin a sin b from per-axis tables)
-  // against the direct plate at every point: the truth differs by a few
-  // ulps of 1, the error (about 0.3 here) by far less than 1e-12 of it; the
-  // same bits for any thread count.
-  const long N = 24;
-  const Image in = random_image(N * 2, N * 2, 1, 41);
-  const Coefficients k = project_with(in, N, N, 3);
-  const double K = 0.7 * M_PI * N;
-  const double direct = l2_error(
-      k, [&](double x, double y, int) { return zoneplate(K, double(N), double(N), x, y); }, 6, 2.0);
-  const double separable = zoneplate_l2_error(k, K, 6, 2.0, 1);
-  EXPECT_NEAR(separable, direct, 1e-12 * direct);
-  EXPECT_EQ(zoneplate_l2_error(k, K, 6, 2.0, 3), separable);
+  // The factored form (per-axis acquisitions and sums) against evaluate()
+  // and the direct plate at every point: they differ in the order of the
+  // double sums only (the error, about 0.3 here, by less than 1e-12 of
+  // itself); the same bits for any thread count. Non-square, with an odd
+  // number of samples per pixel.
+  const long W = 24, H = 18;
+  const Image in = random_image(W * 2, H * 2, 1, 41);
+  const Coefficients k = project_with(in, W, H, 3);
+  const double K = 0.7 * M_PI * W;
+  const double direct = direct_l2(k, W * 5, H * 5, 2.0, [&](long i, long j, int) {
+    return zoneplate(K, double(W), double(H), (i + 0.5) / 5, (j + 0.5) / 5);
+  });
+  const double factored = zoneplate_l2_error(k, K, 5, 2.0, 1);
+  EXPECT_NEAR(factored, direct, 1e-12 * direct);
+  EXPECT_EQ(zoneplate_l2_error(k, K, 5, 2.0, 3), factored);
   EXPECT_THROW(zoneplate_l2_error(k, K, 0, 2.0, 1), std::invalid_argument);
+  // The hexagonal space evaluates f_app at every sample, through float.
+  HexProjectionOptions ho;
+  const Coefficients hex = project_hexagonal(in, double(W), double(H), ho);
+  const double hex_direct = direct_l2(hex, W * 5, H * 5, 2.0, [&](long i, long j, int) {
+    return zoneplate(K, double(W), double(H), (i + 0.5) / 5, (j + 0.5) / 5);
+  });
+  EXPECT_NEAR(zoneplate_l2_error(hex, K, 5, 2.0, 2), hex_direct, 1e-6 * hex_direct);
 }
 
 TEST(Metrics, OvershootOfAHandMadeOutput) {

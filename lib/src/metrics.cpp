@@ -16,6 +16,8 @@
 
 #include "fftw_planner.h"
 #include "sis/resample.h"
+#include "sis/space.h"
+#include "sis/weights.h"
 
 namespace sis {
 
@@ -72,11 +74,15 @@ std::vector<std::pair<long, long>> axis_windows(long n_out, long n_in, double r)
   return w;
 }
 
-// RMS of f_app - f over the centred reference grid of ref_w x ref_h samples
-// inside the border; truth(i, j, c) is f at sample (i, j).
-template <typename Truth>
-double l2_on_grid(const Coefficients& k, long ref_w, long ref_h, double border, int threads,
-                  bool truth_on_any_thread, const Truth& truth) {
+// --- the Cartesian route of the continuous L2 error -------------------------
+// f_app at the inside samples is Wy C Wx' (per channel), Wx and Wy the tables
+// from coefficients to sample columns and rows. Then
+//   sum (f_app - f)^2 = sum_{ky,ly} Gy[ky][ly] sum_{kx,lx} Gx[kx][lx] c[ky][kx] c[ly][lx]
+//                       - 2 sum_k c[k] a[k] + sum f^2,
+// Gx = Wx' Wx and Gy = Wy' Wy over the inside samples, a = Wy' F Wx the
+// reference acquired by the same tables.
+
+void check_coefficients(const Coefficients& k) {
   if (k.c.width < 1 || k.c.height < 1 || k.c.channels < 1 || !(k.image_width > 0) ||
       !(k.image_height > 0)) {
     std::ostringstream m;
@@ -84,9 +90,177 @@ double l2_on_grid(const Coefficients& k, long ref_w, long ref_h, double border, 
       << " over an image of " << k.image_width << " x " << k.image_height << " are empty";
     throw std::invalid_argument(m.str());
   }
+}
+
+void check_border(double border) {
   if (!(border >= 0) || !std::isfinite(border))
     throw std::invalid_argument("l2_error(): border " + std::to_string(border) +
                                 " is not a finite value >= 0");
+}
+
+[[noreturn]] void nothing_inside(const Coefficients& k, double border) {
+  std::ostringstream m;
+  m << "l2_error(): border " << border << " leaves no sample of the " << k.image_width << " x "
+    << k.image_height << " image";
+  throw std::invalid_argument(m.str());
+}
+
+// The samples [first, last) of n across `extent` whose position
+// (i + 1/2) extent / n lies in [border, extent - border].
+std::pair<long, long> inside_samples(long n, double extent, double border) {
+  const double s = extent / n;
+  long first = 0, last = n;
+  while (first < n && (first + 0.5) * s < border) ++first;
+  while (last > first && !((last - 1 + 0.5) * s <= extent - border)) --last;
+  return {first, last};
+}
+
+// Sparse symmetric Gram matrix of one axis' table over its inside samples.
+using Gram = std::vector<std::vector<std::pair<long, double>>>;
+
+Gram gram(const AxisWeights& w, long first, long last) {
+  Gram g(w.sources);
+  for (long i = first; i < last; ++i)
+    for (long e = w.begin(i); e < w.end(i); ++e)
+      for (long f = w.begin(i); f < w.end(i); ++f) {
+        auto& row = g[w.index[e]];
+        const double v = w.weight[e] * w.weight[f];
+        auto it = std::find_if(row.begin(), row.end(), [&](const auto& p) { return p.first == w.index[f]; });
+        if (it == row.end())
+          row.emplace_back(w.index[f], v);
+        else
+          it->second += v;
+      }
+  return g;
+}
+
+// A Cartesian space's samples of the reference grid: the tables, the inside
+// ranges and the Gram matrices.
+struct SamplePlan {
+  AxisWeights wx, wy;
+  std::pair<long, long> xs, ys;
+  Gram gx, gy;
+  long count(int channels) const { return (xs.second - xs.first) * (ys.second - ys.first) * long(channels); }
+};
+
+SamplePlan sample_plan(const Coefficients& k, long ref_w, long ref_h, double border) {
+  SamplePlan p;
+  p.xs = inside_samples(ref_w, k.image_width, border);
+  p.ys = inside_samples(ref_h, k.image_height, border);
+  if (p.xs.first >= p.xs.second || p.ys.first >= p.ys.second) nothing_inside(k, border);
+  p.wx = CartesianSpace::sample_weights(k, 0, ref_w);
+  p.wy = CartesianSpace::sample_weights(k, 1, ref_h);
+  p.gx = gram(p.wx, p.xs.first, p.xs.second);
+  p.gy = gram(p.wy, p.ys.first, p.ys.second);
+  return p;
+}
+
+// sum over the inside samples of f_app^2: c' (Gy x Gx) c.
+double app_energy(const SamplePlan& p, const Grid<double>& c) {
+  const int C = c.channels;
+  Grid<double> u(c.width, c.height, C);  // u[ly] = c[ly] Gx
+  for (long ly = 0; ly < c.height; ++ly)
+    for (long kx = 0; kx < c.width; ++kx)
+      for (const auto& [lx, g] : p.gx[kx])
+        for (int ch = 0; ch < C; ++ch) u.at(kx, ly, ch) += g * c.at(lx, ly, ch);
+  double s = 0;
+  for (long ky = 0; ky < c.height; ++ky)
+    for (const auto& [ly, g] : p.gy[ky]) {
+      const double* a = c.row(ky);
+      const double* b = u.row(ly);
+      double d = 0;
+      for (std::size_t q = 0; q < c.row_size(); ++q) d += a[q] * b[q];
+      s += g * d;
+    }
+  return s;
+}
+
+double dot(const Grid<double>& a, const Grid<double>& b) {
+  double s = 0;
+  for (std::size_t q = 0; q < a.data.size(); ++q) s += a.data[q] * b.data[q];
+  return s;
+}
+
+// The reference acquired by the plan's tables, a = Wy' F Wx, and sum f^2
+// over the inside samples. fill(j, row) writes the inside samples of
+// reference row j (row[(i - xs.first) C + c]); it is called from the
+// workers where fill_on_any_thread. Rows are acquired in blocks on the
+// workers and added in row order: the same bits for any thread count.
+struct AcquiredReference {
+  Grid<double> a;
+  double energy = 0;
+};
+
+AcquiredReference acquire_reference(const SamplePlan& p, long cw, long ch, int C, int threads,
+                                    bool fill_on_any_thread,
+                                    const std::function<void(long, double*)>& fill) {
+  AcquiredReference r{Grid<double>(cw, ch, C), 0.0};
+  const long nx = p.xs.second - p.xs.first;
+  constexpr long kBlock = 64;
+  std::vector<double> samples(std::size_t(kBlock) * nx * C);
+  std::vector<double> rows(std::size_t(kBlock) * cw * C);
+  std::vector<double> energy(kBlock);
+  for (long j0 = p.ys.first; j0 < p.ys.second; j0 += kBlock) {
+    const long n = std::min(kBlock, p.ys.second - j0);
+    auto row_pass = [&](long b0, long b1) {
+      for (long b = b0; b < b1; ++b) {
+        double* f = samples.data() + std::size_t(b) * nx * C;
+        if (fill_on_any_thread) fill(j0 + b, f);
+        double* t = rows.data() + std::size_t(b) * cw * C;
+        std::fill(t, t + std::size_t(cw) * C, 0.0);
+        double e2 = 0;
+        for (long i = 0; i < nx; ++i) {
+          const double* v = f + std::size_t(i) * C;
+          for (int c = 0; c < C; ++c) e2 += v[c] * v[c];
+          const long ii = i + p.xs.first;
+          for (long e = p.wx.begin(ii); e < p.wx.end(ii); ++e) {
+            double* dst = t + std::size_t(p.wx.index[e]) * C;
+            const double w = p.wx.weight[e];
+            for (int c = 0; c < C; ++c) dst[c] += w * v[c];
+          }
+        }
+        energy[b] = e2;
+      }
+    };
+    if (!fill_on_any_thread)
+      for (long b = 0; b < n; ++b) fill(j0 + b, samples.data() + std::size_t(b) * nx * C);
+    parallel_for(n, threads, row_pass);
+    for (long b = 0; b < n; ++b) {
+      const long j = j0 + b;
+      const double* t = rows.data() + std::size_t(b) * cw * C;
+      for (long e = p.wy.begin(j); e < p.wy.end(j); ++e) {
+        double* dst = r.a.row(p.wy.index[e]);
+        const double w = p.wy.weight[e];
+        for (std::size_t q = 0; q < std::size_t(cw) * C; ++q) dst[q] += w * t[q];
+      }
+      r.energy += energy[b];
+    }
+  }
+  return r;
+}
+
+double rms_of(double app_energy, double cross, double ref_energy, long count) {
+  return std::sqrt(std::max(0.0, app_energy - 2 * cross + ref_energy) / double(count));
+}
+
+// What identifies a Cartesian space's samples of the reference grid.
+std::vector<double> space_key(const Coefficients& k) {
+  const Kernel& g = k.generator;
+  const auto& L = k.lattice.matrix();
+  return {double(int(g.kind())), double(g.degree()), g.radius(), g.param(0), g.param(1),
+          g.param(2), L[0], L[1], L[2], L[3], k.lattice.origin().x, k.lattice.origin().y,
+          double(k.c.width), double(k.c.height), double(k.c.channels), double(int(k.boundary)),
+          k.image_width, k.image_height};
+}
+
+
+// RMS of f_app - f over the centred reference grid of ref_w x ref_h samples
+// inside the border; truth(i, j, c) is f at sample (i, j).
+template <typename Truth>
+double l2_on_grid(const Coefficients& k, long ref_w, long ref_h, double border, int threads,
+                  bool truth_on_any_thread, const Truth& truth) {
+  check_coefficients(k);
+  check_border(border);
   const Image app = resample(k, Display::centred(), ref_w, ref_h, threads);
   const double sx = k.image_width / ref_w, sy = k.image_height / ref_h;
   auto inside = [&](long i, double s, double extent) {
@@ -134,6 +308,7 @@ double l2_on_grid(const Coefficients& k, long ref_w, long ref_h, double border, 
   }
   return std::sqrt(sum / count);
 }
+
 
 }  // namespace
 
@@ -251,16 +426,56 @@ double psnr(const ImageView& a, const ImageView& b, double peak, long border) {
   return 20 * std::log10(peak / rms);
 }
 
+struct L2Reference::Acquired {
+  std::vector<double> key;
+  SamplePlan plan;
+  AcquiredReference reference;
+};
+
+L2Reference::L2Reference(const ImageView& reference, double border_output_pixels, int threads)
+    : reference_(reference), border_(border_output_pixels), threads_(threads) {
+  check_not_empty(reference, "l2_error");
+  check_border(border_output_pixels);
+}
+
+L2Reference::~L2Reference() = default;
+L2Reference::L2Reference(L2Reference&&) noexcept = default;
+L2Reference& L2Reference::operator=(L2Reference&&) noexcept = default;
+
+double L2Reference::l2_error(const Coefficients& k) {
+  check_coefficients(k);
+  const ImageView& f = reference_;
+  if (f.channels != k.c.channels)
+    throw std::invalid_argument("l2_error(): reference has " + std::to_string(f.channels) +
+                                " channels, the coefficients " + std::to_string(k.c.channels));
+  if (space_of(k) != SpaceKind::Cartesian)
+    return l2_on_grid(k, f.width, f.height, border_, threads_, true,
+                      [&](long i, long j, int c) { return double(f.at(i, j, c)); });
+  const std::vector<double> key = space_key(k);
+  auto it = std::find_if(acquired_.begin(), acquired_.end(),
+                         [&](const auto& q) { return q->key == key; });
+  if (it == acquired_.end()) {
+    auto q = std::make_unique<Acquired>();
+    q->key = key;
+    q->plan = sample_plan(k, f.width, f.height, border_);
+    const auto xs = q->plan.xs;
+    const int C = f.channels;
+    q->reference = acquire_reference(q->plan, k.c.width, k.c.height, C, threads_, true,
+                                     [&](long j, double* row) {
+                                       const float* v = f.row(j) + std::size_t(xs.first) * C;
+                                       std::copy(v, v + (xs.second - xs.first) * C, row);
+                                     });
+    acquired_.push_back(std::move(q));
+    it = acquired_.end() - 1;
+  }
+  const Acquired& q = **it;
+  return rms_of(app_energy(q.plan, k.c), dot(k.c, q.reference.a), q.reference.energy,
+                q.plan.count(k.c.channels));
+}
+
 double l2_error(const Coefficients& coefficients, const ImageView& reference,
                 double border_output_pixels, int threads) {
-  check_not_empty(reference, "l2_error");
-  if (reference.channels != coefficients.c.channels)
-    throw std::invalid_argument("l2_error(): reference has " + std::to_string(reference.channels) +
-                                " channels, the coefficients " +
-                                std::to_string(coefficients.c.channels));
-  return l2_on_grid(coefficients, reference.width, reference.height, border_output_pixels, threads,
-                    true,
-                    [&](long i, long j, int c) { return double(reference.at(i, j, c)); });
+  return L2Reference(reference, border_output_pixels, threads).l2_error(coefficients);
 }
 
 double l2_error(const Coefficients& coefficients,
@@ -271,11 +486,23 @@ double l2_error(const Coefficients& coefficients,
     throw std::invalid_argument("l2_error(): samples_per_pixel " +
                                 std::to_string(samples_per_pixel) + " < 1");
   if (!truth) throw std::invalid_argument("l2_error(): no truth function");
-  const long ref_w = std::max(1L, std::lround(coefficients.image_width * samples_per_pixel));
-  const long ref_h = std::max(1L, std::lround(coefficients.image_height * samples_per_pixel));
-  const double sx = coefficients.image_width / ref_w, sy = coefficients.image_height / ref_h;
-  return l2_on_grid(coefficients, ref_w, ref_h, border_output_pixels, threads, truth_on_any_thread,
-                    [&](long i, long j, int c) { return truth((i + 0.5) * sx, (j + 0.5) * sy, c); });
+  check_coefficients(coefficients);
+  check_border(border_output_pixels);
+  const Coefficients& k = coefficients;
+  const long ref_w = std::max(1L, std::lround(k.image_width * samples_per_pixel));
+  const long ref_h = std::max(1L, std::lround(k.image_height * samples_per_pixel));
+  const double sx = k.image_width / ref_w, sy = k.image_height / ref_h;
+  if (space_of(k) != SpaceKind::Cartesian)
+    return l2_on_grid(k, ref_w, ref_h, border_output_pixels, threads, truth_on_any_thread,
+                      [&](long i, long j, int c) { return truth((i + 0.5) * sx, (j + 0.5) * sy, c); });
+  const SamplePlan p = sample_plan(k, ref_w, ref_h, border_output_pixels);
+  const int C = k.c.channels;
+  const AcquiredReference r = acquire_reference(
+      p, k.c.width, k.c.height, C, threads, truth_on_any_thread, [&](long j, double* row) {
+        for (long i = p.xs.first; i < p.xs.second; ++i)
+          for (int c = 0; c < C; ++c) *row++ = truth((i + 0.5) * sx, (j + 0.5) * sy, c);
+      });
+  return rms_of(app_energy(p, k.c), dot(k.c, r.a), r.energy, p.count(C));
 }
 
 OvershootReport overshoot(const ImageView& output, const ImageView& input,
@@ -370,8 +597,54 @@ double zoneplate_l2_error(const Coefficients& coefficients, double K, int sample
   std::vector<double> cx, sx_, cy, sy_;
   table(ref_w, sx, W, cx, sx_);
   table(ref_h, sy, H, cy, sy_);
-  return l2_on_grid(coefficients, ref_w, ref_h, border_output_pixels, threads, true,
-                    [&](long i, long j, int) { return 0.5 + 0.5 * (cx[i] * cy[j] - sx_[i] * sy_[j]); });
+  const Coefficients& k = coefficients;
+  if (space_of(k) != SpaceKind::Cartesian)
+    return l2_on_grid(k, ref_w, ref_h, border_output_pixels, threads, true,
+                      [&](long i, long j, int) { return 0.5 + 0.5 * (cx[i] * cy[j] - sx_[i] * sy_[j]); });
+  check_coefficients(k);
+  check_border(border_output_pixels);
+  // f = 1/2 + 1/2 (cx cy - sx sy): a = Wy' F Wx is three outer products of
+  // per-axis acquisitions, and sum f^2 = N/4 + (1/2) sum cos + (1/4) sum cos^2
+  // of per-axis sums.
+  const SamplePlan p = sample_plan(k, ref_w, ref_h, border_output_pixels);
+  auto acquired = [](const AxisWeights& w, std::pair<long, long> range, const std::vector<double>* v) {
+    std::vector<double> out(w.sources, 0.0);
+    for (long i = range.first; i < range.second; ++i)
+      for (long e = w.begin(i); e < w.end(i); ++e) out[w.index[e]] += w.weight[e] * (v ? (*v)[i] : 1.0);
+    return out;
+  };
+  const auto x1 = acquired(p.wx, p.xs, nullptr), xc = acquired(p.wx, p.xs, &cx),
+             xs = acquired(p.wx, p.xs, &sx_);
+  const auto y1 = acquired(p.wy, p.ys, nullptr), yc = acquired(p.wy, p.ys, &cy),
+             ys = acquired(p.wy, p.ys, &sy_);
+  const int C = k.c.channels;
+  double cross = 0;
+  for (long ky = 0; ky < k.c.height; ++ky)
+    for (long kx = 0; kx < k.c.width; ++kx) {
+      const double a = 0.5 * (y1[ky] * x1[kx] + yc[ky] * xc[kx] - ys[ky] * xs[kx]);
+      for (int c = 0; c < C; ++c) cross += a * k.c.at(kx, ky, c);
+    }
+  // sums over the inside samples of one axis: cos, sin, cos^2, sin^2, cos sin
+  struct Sums {
+    double c = 0, s = 0, cc = 0, ss = 0, cs = 0;
+  };
+  auto sums = [](std::pair<long, long> range, const std::vector<double>& co, const std::vector<double>& si) {
+    Sums r;
+    for (long i = range.first; i < range.second; ++i) {
+      r.c += co[i];
+      r.s += si[i];
+      r.cc += co[i] * co[i];
+      r.ss += si[i] * si[i];
+      r.cs += co[i] * si[i];
+    }
+    return r;
+  };
+  const Sums X = sums(p.xs, cx, sx_), Y = sums(p.ys, cy, sy_);
+  const double n = double(p.xs.second - p.xs.first) * double(p.ys.second - p.ys.first);
+  const double sum_cos = X.c * Y.c - X.s * Y.s;
+  const double sum_cos2 = X.cc * Y.cc - 2 * X.cs * Y.cs + X.ss * Y.ss;
+  const double energy = C * (0.25 * n + 0.5 * sum_cos + 0.25 * sum_cos2);
+  return rms_of(app_energy(p, k.c), cross, energy, p.count(C));
 }
 
 double zoneplate(double K, double W, double H, double x, double y) {

@@ -165,6 +165,11 @@ double CartesianSpace::evaluate(const Coefficients& k, Vec2 x, int channel) {
   return s;
 }
 
+AxisWeights CartesianSpace::sample_weights(const Coefficients& k, int axis, long count) {
+  check_separable(k, "l2_error");
+  return display_axis(k, axis, count, {0.0}, false);
+}
+
 Image CartesianSpace::resample(const Coefficients& k, const Display& display, long out_width,
                               long out_height, int threads) {
   check_separable(k, "resample");

@@ -210,6 +210,27 @@ def test_metrics_equal_simetrics(files, tmp_path):
     assert o["pixels_out_of_range"] == m["overshoot"]["pixels_out_of_range"]
 
 
+def test_reference_keeps_its_acquisitions(files):
+    """A Reference gives l2_error's bits for every approximation, reads a
+    float32 array where it is, and refuses a second border."""
+    truth = siproject.read_image(files["float"])
+    ref = siproject.Reference(truth, border=2)
+    assert np.shares_memory(ref.array, truth)
+    small = truth[::4, ::4].copy()
+    for generator in ("box", "tent", "cubic", "cubic"):  # the last from the kept acquisition
+        k = siproject.coefficients(small, factor=1, generator=generator)
+        assert ref.l2_error(k) == siproject.l2_error(k, truth, border=2)
+        assert siproject.l2_error(k, ref) == ref.l2_error(k)
+    hex_k = siproject.coefficients(small, factor=1, lattice="hex")
+    assert ref.l2_error(hex_k) == siproject.l2_error(hex_k, truth, border=2)
+    with pytest.raises(ValueError, match="border 3 given with a Reference made with border 2"):
+        siproject.l2_error(k, ref, border=3)
+    with pytest.raises(ValueError, match="border -1"):
+        siproject.Reference(truth, border=-1)
+    with pytest.raises(ValueError, match="channels"):
+        ref.l2_error(siproject.coefficients(small[:, :, :1], factor=1))
+
+
 def test_float32_input_is_not_copied(tmp_path):
     """A 4000 x 4000 float32 array projects with a peak well below a second copy."""
     code = textwrap.dedent("""

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <memory>
 #include <new>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -264,6 +265,16 @@ ImageView view_of(const FloatArray& a, const char* what) {
   return ImageView(a.data(), long(a.shape(1)), long(a.shape(0)), int(a.shape(2)));
 }
 
+// A reference prepared for many L2 errors: the pixels it reads (the
+// caller's array, or pybind11's float32 copy of it) held with it; one error
+// at a time (the acquisitions it keeps are shared).
+struct PyL2Reference {
+  PyL2Reference(FloatArray a, L2Reference r) : pixels(std::move(a)), reference(std::move(r)) {}
+  FloatArray pixels;
+  L2Reference reference;
+  std::mutex busy;
+};
+
 // Image copies, for write_image (which takes an Image).
 Image image_of(const FloatArray& a, const char* what) {
   const ImageView v = view_of(a, what);
@@ -326,6 +337,23 @@ PYBIND11_MODULE(_core, m) {
       return zoneplate_l2_error(c.k, K, samples_per_pixel, border, c.threads);
     });
   });
+  py::class_<PyL2Reference>(m, "L2Reference")
+      .def(py::init([](FloatArray a, double border, int threads) {
+        const ImageView v = view_of(a, "Reference()");
+        const int n = resolved_threads(threads);
+        return translated(true, [&] {
+          return std::make_unique<PyL2Reference>(a, L2Reference(v, border, n));
+        });
+      }))
+      .def_property_readonly("border", [](const PyL2Reference& r) { return r.reference.border(); })
+      .def_property_readonly("array", [](const PyL2Reference& r) { return r.pixels; })
+      .def("_l2_error", [](PyL2Reference& r, const PyCoefficients& c) {
+        return translated(true, [&] {
+          py::gil_scoped_release free;
+          std::lock_guard<std::mutex> one(r.busy);
+          return r.reference.l2_error(c.k);
+        });
+      });
   m.def("_overshoot", [](FloatArray output, FloatArray input, double neighbourhood,
                          double tolerance, long border) {
     const ImageView out = view_of(output, "overshoot()"), in = view_of(input, "overshoot()");

@@ -5,6 +5,7 @@
 // double precision. Units are output pixels; pixel (i, j) covers
 // [i, i+1) x [j, j+1) and its centre is (i + 1/2, j + 1/2).
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "sis/image.h"
@@ -38,14 +39,43 @@ double psnr(const ImageView& a, const ImageView& b, double peak = 1.0, long bord
 
 // Continuous L2 error of f_app against a reference render f of the same
 // image_width x image_height frame at a much higher factor: f's sample (i, j)
-// sits at ((i + 1/2) image_width / ref_w, (j + 1/2) image_height / ref_h),
-// and f_app is evaluated exactly there (resample() with the centred display;
-// the values pass through float, a relative rounding of about 6e-8). Returns
-// sqrt(mean of (f_app - f)^2) over every channel and every sample whose
-// position lies in [border, image_width - border] x [border, image_height -
-// border], the RMS estimate of the normalised L2 norm of f_app - f.
+// sits at ((i + 1/2) image_width / ref_w, (j + 1/2) image_height / ref_h).
+// Returns sqrt(mean of (f_app - f)^2) over every channel and every sample
+// whose position lies in [border, image_width - border] x [border,
+// image_height - border], the RMS estimate of the normalised L2 norm of
+// f_app - f. In the Cartesian space the sum is formed in double precision
+// without evaluating f_app (docs/design.md section 8): sum f_app^2 = c' G c
+// with G the Gram matrix of the generator's samples (one per axis), sum
+// f_app f = c' a with a the reference acquired by the same samples, and
+// sum f^2; in the hexagonal space f_app is evaluated at every sample
+// (resample() with the centred display; the values pass through float, a
+// relative rounding of about 6e-8).
 double l2_error(const Coefficients& coefficients, const ImageView& reference,
                 double border_output_pixels = 0, int threads = 1);
+
+// The same error of many approximations against one reference: the
+// reference is acquired once per Cartesian space met (generator, lattice,
+// boundary and frame) and kept, so that each further error costs a pass
+// over the coefficients only. The same value as l2_error(coefficients,
+// reference, border, threads), bit for bit. The reference's pixels must
+// outlive the object.
+class L2Reference {
+ public:
+  L2Reference(const ImageView& reference, double border_output_pixels = 0, int threads = 1);
+  ~L2Reference();
+  L2Reference(L2Reference&&) noexcept;
+  L2Reference& operator=(L2Reference&&) noexcept;
+  double l2_error(const Coefficients& coefficients);
+  const ImageView& reference() const { return reference_; }
+  double border() const { return border_; }
+
+ private:
+  struct Acquired;
+  ImageView reference_;
+  double border_;
+  int threads_;
+  std::vector<std::unique_ptr<Acquired>> acquired_;
+};
 
 // The same against a closed-form truth f(x, y, channel) (output-pixel
 // coordinates), on a grid of samples_per_pixel x samples_per_pixel points per
@@ -63,9 +93,10 @@ double l2_error(const Coefficients& coefficients,
 double zoneplate(double K, double W, double H, double x, double y);
 
 // l2_error against zoneplate(K, ...) over the coefficients' frame, on the
-// grid of samples_per_pixel^2 points per output pixel: the plate's phase is
+// grid of samples_per_pixel^2 points per output pixel. The plate's phase is
 // a sum of a column's and a row's, so the truth is cos a cos b - sin a sin b
-// from one table per axis (equal to the direct form to a few ulps).
+// from one table per axis; in the Cartesian space every sum then factors
+// per axis as well, and the error costs a pass over the coefficients.
 double zoneplate_l2_error(const Coefficients& coefficients, double K, int samples_per_pixel,
                           double border_output_pixels = 0, int threads = 1);
 

@@ -13,6 +13,7 @@
 #include "sis/imageio.h"
 #include "sis/prefilter.h"
 #include "sis/resample.h"
+#include "sis/weights.h"
 
 namespace sis {
 
@@ -27,6 +28,10 @@ struct CartesianSpace {
   static void prefilter(Coefficients& k, int threads, PrefilterMethod method);
   static Image resample(const Coefficients& k, const Display& display, long W, long H, int threads);
   static double evaluate(const Coefficients& k, Vec2 x, int channel);
+  // f_app along one axis at `count` points (i + 1/2) extent / count: the
+  // table from coefficients to those points, the centred display's (the
+  // continuous L2 error's plan).
+  static AxisWeights sample_weights(const Coefficients& k, int axis, long count);
   static std::string generator_name(const Coefficients& k);
   static double radius(const Coefficients& k);  // of the generator, in lattice steps
   // The frame's own size in output pixels (its coefficient grid's, here).

@@ -42,6 +42,7 @@ __all__ = [
     "rms_difference",
     "psnr",
     "l2_error",
+    "Reference",
     "overshoot",
     "luminance",
     "srgb8",
@@ -242,16 +243,48 @@ def psnr(a: np.ndarray, b: np.ndarray, *, peak: float = 1.0, border: int = 0) ->
     return _core._psnr(_samples(a), _samples(b), float(peak), int(border))
 
 
-def l2_error(k: Coefficients, truth: Optional[np.ndarray] = None, *,
+class Reference:
+    """A reference render kept for the continuous L2 error of many
+    approximations of its frame: Reference(array, border=4).l2_error(k).
+
+    The array (H, W, C), float32 or float16, is read where it is when it is
+    C-contiguous float32 (otherwise a float32 copy is kept). Each Cartesian
+    space met (generator, lattice, boundary, frame) acquires the reference
+    once; every further error in it costs a pass over the coefficients. The
+    values are those of l2_error(k, array, border=border), bit for bit.
+    """
+
+    def __init__(self, truth: np.ndarray, *, border: float = 0.0, threads: int = 0):
+        self._r = _core.L2Reference(_samples(truth), float(border), int(threads))
+
+    border = property(lambda self: self._r.border)
+    array = property(lambda self: self._r.array)
+
+    def l2_error(self, k: Coefficients) -> float:
+        """Continuous L2 error of k's approximation against this reference."""
+        return self._r._l2_error(k._k)
+
+    def __repr__(self) -> str:
+        h, w, c = self._r.array.shape
+        return f"<siproject.Reference {w} x {h} x {c}, border {self.border:g}>"
+
+
+def l2_error(k: Coefficients, truth: Optional[Union[np.ndarray, Reference]] = None, *,
              zoneplate: Optional[float] = None, samples_per_pixel: int = 8,
              border: float = 0.0) -> float:
     """Continuous L2 error of k's approximation against a truth: a render of
-    the same frame at a much higher factor (an array), or the closed-form
-    zone plate of scenes/zoneplate.pov with ZP_K = zoneplate (sampled at
+    the same frame at a much higher factor (an array, or a Reference made
+    from one, whose border then applies), or the closed-form zone plate of
+    scenes/zoneplate.pov with ZP_K = zoneplate (sampled at
     samples_per_pixel^2 points per output pixel). border: output pixels left
     out along each edge."""
     if (truth is None) == (zoneplate is None):
         raise ValueError("l2_error(): give exactly one truth: an array or zoneplate=K")
+    if isinstance(truth, Reference):
+        if float(border) not in (0.0, truth.border):
+            raise ValueError(f"l2_error(): border {border:g} given with a Reference made with "
+                             f"border {truth.border:g}")
+        return truth.l2_error(k)
     return _core._l2_error(k._k, None if truth is None else _samples(truth),
                            None if zoneplate is None else float(zoneplate),
                            int(samples_per_pixel), float(border))
