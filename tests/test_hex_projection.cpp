@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -119,7 +120,7 @@ TEST(HexAcquisition, MatchesDirectSumAtAnyRatio) {
   for (int n = 1; n <= kMaxBoxSplineOrder; ++n)
     for (Boundary b : kRules) {
       const HexLayout L = hex_layout(1.0, W, H, 3);
-      const HexAcquisitionPlan plan(win, hin, 2, W, H, L, n, b);
+      const HexAcquisitionPlan plan(win, hin, 2, W, H, L, n, b, HexQuadrature::Point);
       const Coefficients got = acquire(in, plan, 2);
       const BoxSpline& B = BoxSpline::hexagonal(n);
       const double scale = dx * dy / std::abs(L.lattice.determinant());
@@ -175,18 +176,191 @@ TEST(HexAcquisition, CellRuleMatchesDirectCellIntegrals) {
     }
 }
 
+namespace {
+
+// Joint moments E[X^a Y^b], a, b <= 3, of the offset D = L U when U has the
+// density M_n: M_n is the law of the sum of n independent uniform segments
+// (T - 1/2) xi along each direction, Lxi = (h, 0), (h/2, hy), (-h/2, hy).
+// Exact: binomial updates with E[(T - 1/2)^m] = 1 / ((m + 1) 2^m), m even.
+std::array<std::array<double, 4>, 4> box_spline_moments(int n, double h, double hy) {
+  std::array<std::array<double, 4>, 4> m{};
+  m[0][0] = 1;
+  auto uniform = [](int k) { return k % 2 ? 0.0 : 1.0 / ((k + 1) * std::pow(2.0, k)); };
+  auto binom = [](int a, int b) {
+    double r = 1;
+    for (int i = 0; i < b; ++i) r = r * (a - i) / (i + 1);
+    return r;
+  };
+  const double dirs[3][2] = {{h, 0}, {h / 2, hy}, {-h / 2, hy}};
+  for (int rep = 0; rep < n; ++rep)
+    for (const auto& d : dirs) {
+      std::array<std::array<double, 4>, 4> next{};
+      for (int a = 0; a <= 3; ++a)
+        for (int b = 0; a + b <= 3; ++b)
+          for (int i = 0; i <= a; ++i)
+            for (int j = 0; j <= b; ++j)  // (X + s dx)^a (Y + s dy)^b
+              next[a][b] += binom(a, i) * binom(b, j) * m[i][j] *
+                            std::pow(d[0], a - i) * std::pow(d[1], b - j) * uniform(a - i + b - j);
+      m = next;
+    }
+  return m;
+}
+
+// A polynomial of total degree `degree` in ((x - x0) / 20, (y - y0) / 20),
+// random coefficients, and its exact inner products r[n] = E[p(x_n + D)].
+struct Polynomial {
+  int degree;
+  double x0, y0;
+  std::array<std::array<double, 4>, 4> c{};
+  double operator()(double x, double y) const {
+    const double a = (x - x0) / 20, b = (y - y0) / 20;
+    double s = 0;
+    for (int i = 0; i <= degree; ++i)
+      for (int j = 0; i + j <= degree; ++j) s += c[i][j] * std::pow(a, i) * std::pow(b, j);
+    return s;
+  }
+  double inner_product(Vec2 p, const std::array<std::array<double, 4>, 4>& m) const {
+    const double A = (p.x - x0) / 20, B = (p.y - y0) / 20;
+    auto binom = [](int a, int b) {
+      double r = 1;
+      for (int i = 0; i < b; ++i) r = r * (a - i) / (i + 1);
+      return r;
+    };
+    double s = 0;
+    for (int i = 0; i <= degree; ++i)
+      for (int j = 0; i + j <= degree; ++j)
+        for (int a = 0; a <= i; ++a)
+          for (int b = 0; b <= j; ++b)
+            s += c[i][j] * binom(i, a) * binom(j, b) * std::pow(A, i - a) * std::pow(B, j - b) *
+                 m[a][b] / std::pow(20.0, a + b);
+    return s;
+  }
+};
+
+Polynomial random_polynomial(int degree, double x0, double y0, unsigned seed) {
+  Polynomial p{degree, x0, y0};
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (auto& row : p.c)
+    for (double& v : row) v = u(rng);
+  return p;
+}
+
+}  // namespace
+
+TEST(HexAcquisition, AlignedRuleIsExactForPolynomialsOfTheGeneratorsDegree) {
+  // The aligned rule's r[n] against the exact inner products E[p(x_n + D)]
+  // for p of degree 2n - 1 (linear for the hat, cubic for the quartic), at
+  // every stored coefficient whose support and interpolation taps lie inside
+  // the input: integer and non-integer factors, two densities (so lattice
+  // and samples meet at other offsets). Each r[n] sums about (4 s)^2 terms of
+  // size 1: rounding below 1e-12. A polynomial of degree 2n is not
+  // reproduced (the rule's degree is sharp).
+  const double W = 31, H = 26;
+  for (int n = 1; n <= kMaxBoxSplineOrder; ++n)
+    for (double density : {1.0, 1.7})
+      for (double factor : {2.0, 3.0, 4.0, 4.37}) {
+        const long win = std::lround(W * factor), hin = std::lround(H * factor);
+        const double dx = W / win, dy = H / hin;
+        const HexLayout L = hex_layout(density, W, H, 2);
+        const HexAcquisitionPlan plan(win, hin, 1, W, H, L, n, Boundary::Mirror,
+                                      HexQuadrature::Aligned);
+        const auto m = box_spline_moments(n, L.step(), L.row_step());
+        double worst[2] = {0, 0};
+        long checked = 0;
+        for (int extra = 0; extra < 2; ++extra) {
+          const Polynomial p = random_polynomial(2 * n - 1 + extra, W / 2, H / 2, 7 * n + extra);
+          const Coefficients k = acquire(sample(p, win, hin, W, H), plan, 2);
+          const double rx = n * L.step() + 3 * dx, ry = n * L.row_step() + 3 * dy;
+          for (long j = 0; j < L.rows; ++j)
+            for (long i = 0; i < L.columns; ++i) {
+              const Vec2 x = L.position(i, j);
+              if (x.x < rx || x.x > W - rx || x.y < ry || x.y > H - ry) continue;
+              worst[extra] = std::max(worst[extra], std::abs(k.c.at(i, j, 0) - p.inner_product(x, m)));
+              checked += extra == 0;
+            }
+        }
+        const std::string what = "order " + std::to_string(n) + " density " +
+                                 std::to_string(density) + " factor " + std::to_string(factor);
+        EXPECT_GT(checked, 100) << what;
+        EXPECT_LT(worst[0], 1e-12) << what;
+        EXPECT_GT(worst[1], 1e-9) << what;
+      }
+}
+
+TEST(HexAcquisition, AlignedRuleMatchesItsDirectDoubleSum) {
+  // r[n] = sum over the aligned grid points g of M(g - x_n) / (s1 s2) times
+  // f~(g), f~ the 4 x 4 cubic Lagrange interpolant of the extended samples
+  // (taps -1 .. 2 around floor of g's sample coordinates), every stored
+  // coefficient, both rules, non-integer factor; double samples (float
+  // samples keep the interpolated rows in float).
+  const long win = 37, hin = 29;
+  const double W = 9, H = 7, dx = W / win, dy = H / hin;
+  const Image samples = random_image(win, hin, 2, 44);
+  Grid<double> in(win, hin, 2);
+  std::copy(samples.data.begin(), samples.data.end(), in.data.begin());
+  auto lagrange = [](double f) {
+    return std::array<double, 4>{-f * (f - 1) * (f - 2) / 6, (f + 1) * (f - 1) * (f - 2) / 2,
+                                 -(f + 1) * f * (f - 2) / 2, (f + 1) * f * (f - 1) / 6};
+  };
+  for (int n = 1; n <= kMaxBoxSplineOrder; ++n)
+    for (Boundary b : kRules) {
+      const HexLayout L = hex_layout(1.0, W, H, 3);
+      const HexAcquisitionPlan plan(win, hin, 2, W, H, L, n, b, HexQuadrature::Aligned);
+      const Coefficients got = acquire(in, plan, 2);
+      const BoxSpline& B = BoxSpline::hexagonal(n);
+      const int s1 = std::max(2, 2 * int(std::lround(L.step() / dx / 2)));
+      const int s2 = std::max(1, int(std::lround(L.row_step() / dy)));
+      EXPECT_EQ(plan.aligned().s1, s1);
+      EXPECT_EQ(plan.aligned().s2, s2);
+      const double dxa = L.step() / s1, dya = L.row_step() / s2;
+      const Vec2 o = L.lattice.origin();
+      double worst = 0;
+      for (long j = 0; j < L.rows; ++j)
+        for (long i = 0; i < L.columns; ++i) {
+          const Vec2 p = L.position(i, j);
+          const Vec2 un = L.lattice.coordinates(p);
+          double ref[2] = {0, 0};
+          const long mc = std::lround((p.x - o.x) / dxa), rc = std::lround((p.y - o.y) / dya);
+          for (long r = rc - n * s2; r <= rc + n * s2; ++r)
+            for (long mm = mc - n * s1; mm <= mc + n * s1; ++mm) {
+              const double gx = o.x + mm * dxa, gy = o.y + r * dya;
+              const Vec2 u = L.lattice.coordinates({gx, gy});
+              const double w = B.eval(u.x - un.x, u.y - un.y) / (s1 * s2);
+              if (w == 0) continue;
+              const double px = gx / dx - 0.5, py = gy / dy - 0.5;
+              const long qx = long(std::floor(px)) - 1, qy = long(std::floor(py)) - 1;
+              const auto lx = lagrange(px - std::floor(px)), ly = lagrange(py - std::floor(py));
+              for (int c = 0; c < 2; ++c) {
+                double f = 0;
+                for (int a = 0; a < 4; ++a)
+                  for (int bb = 0; bb < 4; ++bb)
+                    f += ly[a] * lx[bb] *
+                         in.at(extend_index(qx + bb, win, b), extend_index(qy + a, hin, b), c);
+                ref[c] += w * f;
+              }
+            }
+          for (int c = 0; c < 2; ++c) worst = std::max(worst, std::abs(got.c.at(i, j, c) - ref[c]));
+        }
+      EXPECT_LT(worst, 1e-13) << n << " " << boundary_name(b);
+    }
+}
+
 TEST(HexAcquisition, BitIdenticalForAnyStripAndThreadCount) {
   const Image in = random_image(203, 171, 3, 1);
   const HexLayout L = hex_layout(1.0, 50, 40, hex_default_margin(2));
+  for (HexQuadrature q : {HexQuadrature::Aligned, HexQuadrature::Point, HexQuadrature::Cell}) {
+    const HexAcquisitionPlan plan(203, 171, 3, 50, 40, L, 2, Boundary::Mirror, q);
+    const Coefficients ref = acquire(in, plan, 1);
+    for (int threads : {1, 2, 5})
+      for (long strip : {1L, 13L, 171L}) {
+        HexAcquisition a(plan, threads);
+        for (long y = 0; y < in.height; y += strip)
+          a.add_rows(y, std::min(in.height, y + strip), in.row(y));
+        EXPECT_EQ(a.finish().c.data, ref.c.data) << hex_quadrature_name(q) << " " << threads << " " << strip;
+      }
+  }
   const HexAcquisitionPlan plan(203, 171, 3, 50, 40, L, 2, Boundary::Mirror);
-  const Coefficients ref = acquire(in, plan, 1);
-  for (int threads : {1, 2, 5})
-    for (long strip : {1L, 13L, 171L}) {
-      HexAcquisition a(plan, threads);
-      for (long y = 0; y < in.height; y += strip)
-        a.add_rows(y, std::min(in.height, y + strip), in.row(y));
-      EXPECT_EQ(a.finish().c.data, ref.c.data) << threads << " " << strip;
-    }
   HexAcquisition a(plan);
   EXPECT_THROW(a.add_rows(2, 4, in.row(2)), std::logic_error);
   a.add_rows(0, 4, in.row(0));
@@ -300,12 +474,15 @@ TEST(HexProjection, QuadratureOfSquareSamples) {
   // on a constant is the generator's transform at the sample grid's dual
   // points, about (pi s h)^(-3n) (three sinc factors, each to the power n).
   // Measured in the interior: hat 2e-2 at s = 4, 3e-4 at s = 16; quartic
-  // 8e-5 at s = 4, 2e-8 at s = 16 (falls 4^6).
-  auto interior_error = [](int n, long s) {
+  // 8e-5 at s = 4, 2e-8 at s = 16 (falls 4^6). The aligned rule is exact
+  // for constants: rounding only.
+  auto interior_error = [](int n, long s, HexQuadrature q = HexQuadrature::Point) {
     const long W = 40, H = 34;
     Grid<double> in(W * s, H * s, 1);
     for (double& v : in.data) v = 1.0;
-    const Coefficients k = project_hexagonal(in, double(W), double(H), options(n));
+    HexProjectionOptions o = options(n);
+    o.quadrature = q;
+    const Coefficients k = project_hexagonal(in, double(W), double(H), o);
     double e = 0;
     for (int t = 0; t < 400; ++t) {
       const Vec2 x{W * (0.3 + 0.4 * (t % 20) / 20.0), H * (0.3 + 0.4 * (t / 20) / 20.0)};
@@ -318,6 +495,8 @@ TEST(HexProjection, QuadratureOfSquareSamples) {
   const double q4 = interior_error(2, 4), q16 = interior_error(2, 16);
   EXPECT_LT(q4, 2e-4);
   EXPECT_LT(q16, q4 / 1000);
+  for (int n = 1; n <= kMaxBoxSplineOrder; ++n)
+    for (long s : {3L, 4L}) EXPECT_LT(interior_error(n, s, HexQuadrature::Aligned), 1e-13) << n << " " << s;
 }
 
 TEST(HexProjection, CellRuleIsExactOnFlatAreasAtAnySampling) {
@@ -340,6 +519,8 @@ TEST(HexProjection, CellRuleIsExactOnFlatAreasAtAnySampling) {
     }
   }
   EXPECT_EQ(parse_hex_quadrature("cell"), HexQuadrature::Cell);
+  EXPECT_EQ(parse_hex_quadrature("aligned"), HexQuadrature::Aligned);
+  EXPECT_EQ(parse_hex_quadrature("point"), HexQuadrature::Point);
   EXPECT_THROW(parse_hex_quadrature("midpoint"), std::invalid_argument);
 }
 

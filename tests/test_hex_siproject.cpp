@@ -32,7 +32,7 @@ class HexSiproject : public TempDirTest {};
 // What siproject computes: the library's projection with the coefficients
 // rounded to float, as the tool keeps them.
 Coefficients library(const Image& in, double W, double H, int order, double density,
-                     HexQuadrature quadrature = HexQuadrature::Point) {
+                     HexQuadrature quadrature = HexQuadrature::Aligned) {
   HexProjectionOptions o;
   o.order = order;
   o.density = density;
@@ -69,6 +69,11 @@ TEST_F(HexSiproject, AgreesWithTheLibrary) {
             0);
   EXPECT_EQ(read_image(path("q.exr")).data,
             resample(library(in, 16, 12, 2, 1.0), Display::antialiased_2x2(), 16, 12).data);
+  // the point quadrature
+  ASSERT_EQ(run(path("in.exr") + " -o " + path("q.exr") + " --factor 4 -q --lattice hex --quadrature point").status,
+            0);
+  EXPECT_EQ(read_image(path("q.exr")).data,
+            resample(library(in, 16, 12, 2, 1.0, HexQuadrature::Point), Display::antialiased_2x2(), 16, 12).data);
   // the cell quadrature
   ASSERT_EQ(run(path("in.exr") + " -o " + path("q.exr") +
                 " --factor 4 -q --lattice hex --generator hex-hat --quadrature cell").status,

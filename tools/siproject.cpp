@@ -301,10 +301,11 @@ int main(int argc, char** argv) {
                              "lattice, min-error, resampled to the output pixels)")
                   ->capture_default_str();
   auto* quad = app.add_option("--quadrature", o.settings.quadrature,
-                              "--lattice hex: the inner products from the samples: point (each "
-                              "sample a point, as on the Cartesian lattice) or cell (each sample "
-                              "the value over its cell: flat areas exact at any sampling, a "
-                              "slight blur; better with hex-hat)")
+                              "--lattice hex: the inner products from the samples: aligned (the "
+                              "samples interpolated onto a grid aligned with the lattice, then "
+                              "summed: exact for the polynomials the generator reproduces), point "
+                              "(each sample a point, as on the Cartesian lattice) or cell (each "
+                              "sample the value over its cell)")
                    ->capture_default_str();
   auto* dens = app.add_option("--density", o.settings.density,
                               "--lattice hex: lattice points per output pixel (at most one "

@@ -12,13 +12,47 @@
 namespace sis {
 
 HexQuadrature parse_hex_quadrature(const std::string& s) {
+  if (s == "aligned") return HexQuadrature::Aligned;
   if (s == "point") return HexQuadrature::Point;
   if (s == "cell") return HexQuadrature::Cell;
-  throw std::invalid_argument("unknown quadrature '" + s + "' (expected point or cell)");
+  throw std::invalid_argument("unknown quadrature '" + s + "' (expected aligned, point or cell)");
 }
 
 std::string hex_quadrature_name(HexQuadrature q) {
-  return q == HexQuadrature::Point ? "point" : "cell";
+  switch (q) {
+    case HexQuadrature::Aligned: return "aligned";
+    case HexQuadrature::Point: return "point";
+    case HexQuadrature::Cell: return "cell";
+  }
+  return "?";
+}
+
+namespace {
+// 4-point Lagrange interpolation at fraction f in [0, 1) between taps 0 and
+// 1 of the taps -1, 0, 1, 2: reproduces every cubic.
+std::array<double, 4> lagrange4(double f) {
+  return {-f * (f - 1) * (f - 2) / 6, (f + 1) * (f - 1) * (f - 2) / 2,
+          -(f + 1) * f * (f - 2) / 2, (f + 1) * f * (f - 1) / 6};
+}
+// The first tap and the fraction of position p (in sample indices).
+std::pair<long, double> lagrange_base(double p) {
+  const double b = std::floor(p);
+  return {static_cast<long>(b) - 1, p - b};
+}
+}  // namespace
+
+void HexAcquisitionPlan::AlignedGrid::rows_of(long e, double dy, double oy, double row_step,
+                                              std::vector<std::pair<long, double>>& out) const {
+  out.clear();
+  const double dya = row_step / s2;
+  // Aligned row r takes taps first(r) .. first(r) + 3, first(r) = floor(Y_r / dy - 1/2) - 1.
+  const long r0 = static_cast<long>(std::floor(((e - 2.5) * dy - oy) / dya)) - 1;
+  const long r1 = static_cast<long>(std::ceil(((e + 2.5) * dy - oy) / dya)) + 1;
+  for (long r = r0; r <= r1; ++r) {
+    const auto [first, f] = lagrange_base((oy + r * dya) / dy - 0.5);
+    if (e < first || e > first + 3) continue;
+    out.emplace_back(r, lagrange4(f)[e - first]);
+  }
 }
 
 HexAcquisitionPlan::HexAcquisitionPlan(long input_width, long input_height, int channels,
@@ -50,6 +84,10 @@ HexAcquisitionPlan::HexAcquisitionPlan(long input_width, long input_height, int 
   scale_ = dx_ * dy_ / std::abs(layout.lattice.determinant());
   const double n = spline_->radius(), h = layout.step(), hy = layout.row_step();
   const Vec2 o = layout.lattice.origin();
+  if (quadrature == HexQuadrature::Aligned) {
+    init_aligned();
+    return;
+  }
   // Extended columns: every sample (with the cell rule: every cell) meeting
   // some coefficient's support.
   const bool cell = quadrature == HexQuadrature::Cell;
@@ -64,6 +102,65 @@ HexAcquisitionPlan::HexAcquisitionPlan(long input_width, long input_height, int 
   const long e1 = static_cast<long>(std::floor(ymax / dy_ - 0.5));
   images_.resize(hin_);
   for (long e = e0; e <= e1; ++e) images_[extend_index(e, hin_, boundary)].push_back(e);
+}
+
+void HexAcquisitionPlan::init_aligned() {
+  AlignedGrid& g = aligned_;
+  const int n = spline_->order();
+  const double h = layout_.step(), hy = layout_.row_step();
+  const Vec2 o = layout_.lattice.origin();
+  g.s1 = std::max(2, 2 * static_cast<int>(std::lround(h / dx_ / 2)));
+  g.s2 = std::max(1, static_cast<int>(std::lround(hy / dy_)));
+  g.half = n * g.s1;
+  g.reach = n * g.s2;
+  const double dxa = h / g.s1, dya = hy / g.s2;
+  // Every lattice point of stored row j sits on aligned column
+  // s1 i + (s1 / 2)(j mod 2) and row s2 j; the table reaches half columns and
+  // reach - 1 rows around it.
+  g.m0 = -g.half;
+  g.columns = g.s1 * (layout_.columns - 1) + g.s1 / 2 + 2 * g.half + 1;
+  std::vector<long> first(g.columns);
+  g.x_weight.resize(g.columns);
+  long qlo = 0, qhi = -1;
+  for (long m = 0; m < g.columns; ++m) {
+    const auto [q, f] = lagrange_base((o.x + (g.m0 + m) * dxa) / dx_ - 0.5);
+    first[m] = q;
+    g.x_weight[m] = lagrange4(f);
+    if (m == 0 || q < qlo) qlo = q;
+    if (m == 0 || q + 3 > qhi) qhi = q + 3;
+  }
+  q0_ = qlo;
+  for (long q = qlo; q <= qhi; ++q) colmap_.push_back(extend_index(q, win_, boundary_));
+  g.x_first.resize(g.columns);
+  for (long m = 0; m < g.columns; ++m) g.x_first[m] = first[m] - q0_;
+  // The table: M_n at (t dxa, dr dya) from the lattice point, t in lattice
+  // steps t / s1 and v = dr / s2 rows, times dxa dya / |det L| = 1 / (s1 s2).
+  const int wt = 2 * g.half + 1;
+  g.table.assign(std::size_t(2 * g.reach - 1) * wt, 0.0);
+  BoxSplineSlice slice;
+  for (int dr = -g.reach + 1; dr < g.reach; ++dr) {
+    spline_->slice(double(dr) / g.s2, slice);
+    for (int t = -g.half; t <= g.half; ++t) {
+      const double u = double(t) / g.s1;
+      if (!(std::abs(u) < slice.half_width)) continue;
+      g.table[std::size_t(dr + g.reach - 1) * wt + (t + g.half)] =
+          slice.eval(u) / (double(g.s1) * g.s2);
+    }
+  }
+  g.first.assign(2 * g.reach - 1, wt);
+  g.last.assign(2 * g.reach - 1, -1);
+  for (int row = 0; row < 2 * g.reach - 1; ++row)
+    for (int t = 0; t < wt; ++t)
+      if (g.table[std::size_t(row) * wt + t] != 0.0) {
+        g.first[row] = std::min(g.first[row], t);
+        g.last[row] = std::max(g.last[row], t);
+      }
+  // Extended rows: every tap of an aligned row the table reaches.
+  const long r_lo = -(g.reach - 1), r_hi = long(g.s2) * (layout_.rows - 1) + g.reach - 1;
+  const long e0 = lagrange_base((o.y + r_lo * dya) / dy_ - 0.5).first;
+  const long e1 = lagrange_base((o.y + r_hi * dya) / dy_ - 0.5).first + 3;
+  images_.resize(hin_);
+  for (long e = e0; e <= e1; ++e) images_[extend_index(e, hin_, boundary_)].push_back(e);
 }
 
 namespace {
@@ -126,6 +223,20 @@ std::vector<long> HexAcquisition::reached(long y0, long y1) const {
   const bool cell = plan_.quadrature() == HexQuadrature::Cell;
   const double cv = cell ? 0.5 * dy / hy : 0.0;
   std::vector<char> touched(R, 0);
+  if (plan_.quadrature() == HexQuadrature::Aligned) {
+    const auto& g = plan_.aligned();
+    std::vector<std::pair<long, double>> rows;
+    for (long k = y0; k < y1; ++k)
+      for (long e : plan_.row_images(k)) {
+        g.rows_of(e, dy, o.y, hy, rows);
+        for (const auto& [r, w] : rows) {
+          // lattice rows j with |r - s2 j| < reach
+          const long j0 = std::max(0L, static_cast<long>(std::floor(double(r - g.reach) / g.s2)) + 1);
+          const long j1 = std::min(R - 1, static_cast<long>(std::ceil(double(r + g.reach) / g.s2)) - 1);
+          for (long j = j0; j <= j1; ++j) touched[j] = 1;
+        }
+      }
+  } else
   for (long k = y0; k < y1; ++k)
     for (long e : plan_.row_images(k)) {
       const double u = ((e + 0.5) * dy - o.y) / hy;
@@ -158,6 +269,62 @@ void HexAcquisition::extend(long y0, long y1, const T* rows, std::vector<T>& ext
   });
 }
 
+template <typename T>
+void HexAcquisition::interpolate(long y0, long y1, const T* rows, std::vector<T>& out,
+                                 int threads) const {
+  const int C = plan_.channels();
+  const long win = plan_.input_width();
+  const auto& g = plan_.aligned();
+  const std::vector<long>& colmap = plan_.column_source();
+  const std::size_t orow = std::size_t(g.columns) * C;
+  out.resize(orow * (y1 - y0));
+  parallel_for(y1 - y0, threads, [&](long r0, long r1) {
+    for (long r = r0; r < r1; ++r) {
+      const T* in = rows + std::size_t(r) * win * C;
+      T* o = out.data() + orow * r;
+      for (long m = 0; m < g.columns; ++m) {
+        const long* q = colmap.data() + g.x_first[m];
+        const auto& w = g.x_weight[m];
+        for (int c = 0; c < C; ++c)
+          o[std::size_t(m) * C + c] =
+              static_cast<T>(w[0] * in[q[0] * C + c] + w[1] * in[q[1] * C + c] +
+                             w[2] * in[q[2] * C + c] + w[3] * in[q[3] * C + c]);
+      }
+    }
+  });
+}
+
+std::size_t HexAcquisition::strip_row_size() const {
+  const std::size_t C = plan_.channels();
+  return plan_.quadrature() == HexQuadrature::Aligned ? std::size_t(plan_.aligned().columns) * C
+                                                      : plan_.column_source().size() * C;
+}
+
+namespace {
+// The aligned rule: coefficient row j takes, from each extended row e of the
+// strip (interpolated along x onto the aligned columns), the table rows of
+// the aligned rows e serves weighted by e's vertical tap: one row of
+// 2 half + 1 weights, applied at every lattice point of the row.
+template <int CC, typename S>
+void aligned_terms(const double* u, int n, const S* src, double* a, int C) {
+  const int Cn = CC > 0 ? CC : C;
+  double sum[CC > 0 ? CC : 1];
+  if constexpr (CC > 0)
+    for (int c = 0; c < CC; ++c) sum[c] = a[c];
+  for (int t = 0; t < n; ++t, src += Cn) {
+    const double w = u[t];
+    if constexpr (CC > 0) {
+      for (int c = 0; c < CC; ++c) sum[c] += w * src[c];
+    } else {
+      for (int c = 0; c < Cn; ++c) a[c] += w * src[c];
+    }
+  }
+  if constexpr (CC > 0)
+    for (int c = 0; c < CC; ++c) a[c] = sum[c];
+}
+
+}  // namespace
+
 template <typename S>
 void HexAcquisition::accumulate(const S* strip, long y0, long y1, const std::vector<long>& work,
                                 int threads) {
@@ -172,7 +339,53 @@ void HexAcquisition::accumulate(const S* strip, long y0, long y1, const std::vec
   const long q0 = plan_.first_column();
   const std::vector<long>& colmap = plan_.column_source();
   const long qlast = q0 + static_cast<long>(colmap.size()) - 1;
-  const std::size_t erow = colmap.size() * std::size_t(C);
+  const std::size_t erow = strip_row_size();
+  if (plan_.quadrature() == HexQuadrature::Aligned) {
+    const auto& g = plan_.aligned();
+    const int wt = 2 * g.half + 1;
+    auto rows_into = [&](auto channels) {
+      constexpr int CC = decltype(channels)::value;
+      const int Cn = CC > 0 ? CC : C;
+      parallel_for(static_cast<long>(work.size()), threads, [&](long w0, long w1) {
+        std::vector<std::pair<long, double>> rows;
+        std::vector<double> u(wt);
+        for (long w = w0; w < w1; ++w) {
+          const long j = work[w];
+          double* acc = acc_.row(j);
+          const long shift = (g.s1 / 2) * (j & 1);
+          for (long k = y0; k < y1; ++k) {
+            const S* hk = strip + erow * (k - y0);
+            for (long e : plan_.row_images(k)) {
+              g.rows_of(e, dy, o.y, hy, rows);
+              std::fill(u.begin(), u.end(), 0.0);
+              int lo = wt, hi = -1;  // the nonzero taps of u
+              for (const auto& [r, ly] : rows) {
+                const long dr = r - long(g.s2) * j;
+                if (dr <= -g.reach || dr >= g.reach || ly == 0.0) continue;
+                const std::size_t row = std::size_t(dr + g.reach - 1);
+                const double* t = g.table.data() + row * wt;
+                for (int q = g.first[row]; q <= g.last[row]; ++q) u[q] += ly * t[q];
+                lo = std::min(lo, g.first[row]);
+                hi = std::max(hi, g.last[row]);
+              }
+              if (hi < lo) continue;
+              for (long i = 0; i < Q; ++i)
+                aligned_terms<CC>(u.data() + lo, hi - lo + 1,
+                                  hk + std::size_t(g.s1 * i + shift + lo) * Cn,
+                                  acc + std::size_t(i) * Cn, Cn);
+            }
+          }
+        }
+      });
+    };
+    switch (C) {
+      case 1: rows_into(std::integral_constant<int, 1>()); break;
+      case 3: rows_into(std::integral_constant<int, 3>()); break;
+      case 4: rows_into(std::integral_constant<int, 4>()); break;
+      default: rows_into(std::integral_constant<int, 0>()); break;
+    }
+    return;
+  }
   // Half a cell in steps and rows (cell rule), zero for the point rule.
   const bool cell = plan_.quadrature() == HexQuadrature::Cell;
   const double ct = cell ? 0.5 * dx / h : 0.0, cv = cell ? 0.5 * dy / hy : 0.0;
@@ -303,8 +516,12 @@ void HexAcquisition::Band::add(long y0, long y1, const T* rows) {
   if (band_ < 0 || y0 != next_row_ || y1 > whole_.bands_.end(band_) || y1 < y0)
     throw std::logic_error("HexAcquisition::Band::add_rows(): rows out of the band's order");
   if (y1 == y0) return;
+  const bool aligned = whole_.plan_.quadrature() == HexQuadrature::Aligned;
   std::vector<T>& ext = extended<T>();
-  whole_.extend(y0, y1, rows, ext, threads_);
+  if (aligned)
+    whole_.interpolate(y0, y1, rows, ext, threads_);
+  else
+    whole_.extend(y0, y1, rows, ext, threads_);
   // The coefficient rows it reaches: added to now where the earlier bands
   // that reach them are done with them (decided at the band's first touch),
   // else kept for end().
@@ -332,7 +549,7 @@ void HexAcquisition::Band::add(long y0, long y1, const T* rows) {
           b = std::max(b, k + 1);
           break;
         }
-    const std::size_t erow = whole_.plan_.column_source().size() * std::size_t(whole_.plan_.channels());
+    const std::size_t erow = whole_.strip_row_size();
     Kept k{a, b, {}, {}, later};
     if constexpr (std::is_same_v<T, float>)
       k.ext_f.assign(ext.begin() + (a - y0) * erow, ext.begin() + (b - y0) * erow);

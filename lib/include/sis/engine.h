@@ -88,7 +88,7 @@ struct Space {
   Kernel generator = Kernel::bspline(3);
   int hex_order = 2;
   double density = 1.0;
-  HexQuadrature quadrature = HexQuadrature::Point;
+  HexQuadrature quadrature = HexQuadrature::Aligned;
 };
 
 struct ProjectionRequest {

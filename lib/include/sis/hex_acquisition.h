@@ -10,21 +10,37 @@
 // the lattice (a[0] = 1/2 for the hat), as on the Cartesian lattice.
 //
 // Quadrature: a square sample grid is incommensurate with the hexagonal
-// lattice, so unlike the Cartesian case the plain sum is not exact for
-// polynomials: its error falls like (dx/h)^2 for the hat and (dx/h)^4 for the
-// quartic (the smoothness of M_n across its knot lines). It is exact for
-// f of degree < 2n when dx = h / s1 with s1 even and dy = (sqrt(3)/2) h / s2:
-// then M_n's transform vanishes to order 2n on the whole dual of the sample
-// grid but 0.
+// lattice, so the plain sum over the samples (HexQuadrature::Point) is not
+// exact for polynomials: its error falls like (dx/h)^2 for the hat and
+// (dx/h)^4 for the quartic (the smoothness of M_n across its knot lines).
+// The sum is exact for f of degree < 2n on a grid aligned with the lattice,
+// spacings h / s1 with s1 even and (sqrt(3)/2) h / s2: there M_n's transform
+// vanishes to order 2n on the whole dual of the grid but 0.
+//
+// HexQuadrature::Aligned (the default) uses that grid: each input row is
+// interpolated along x onto the aligned columns X_m = o.x + m h / s1, then
+// the rows along y onto the aligned rows Y_r = o.y + r (sqrt(3)/2) h / s2,
+// both by 4-point cubic Lagrange interpolation (exact for cubics), and the
+// plain sum runs over the aligned grid, whose weights M_n(X_m - x_n, Y_r - y_n)
+// / (s1 s2) are one fixed table for every lattice point (the points lie on
+// the grid). s1 is the even integer and s2 the integer nearest the input's
+// samples per step and per row (at least 2 and 1), so the grid is about as
+// dense as the input. Exact for every polynomial of degree < 2n (linear for
+// the hat, cubic for the quartic) at every lattice point whose support and
+// interpolation taps lie inside the input, whatever the factor and the
+// alignment. Each input row still adds terms to the coefficient rows in
+// input row order: the vertical interpolation weights of row e are folded
+// into the table rows it serves.
 //
 // HexQuadrature::Cell instead takes each sample as the value of f over its
 // cell [i dx, (i+1) dx] x [j dy, (j+1) dy] and integrates that piecewise
-// constant image against phi exactly (BoxSplineBand): exact for constant and
-// linear f whatever the ratio of the grids (no ripple on flat areas), at the
-// price of a smooth bias -(dx^2 f_xx + dy^2 f_yy) / 24 where f curves.
+// constant image against phi exactly (BoxSplineBand): no ripple on flat
+// areas, at the price of a smooth bias -(dx^2 f_xx + dy^2 f_yy) / 24 where f
+// curves.
 //
 // Rows stream through: each input row is read once and added to every
 // coefficient whose support holds it or one of its boundary images.
+#include <array>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -38,17 +54,19 @@
 namespace sis {
 
 enum class HexQuadrature {
-  Point,  // r[n] = (dx dy / |det L|) sum_q f_q phi(x_q - x_n), as on the Cartesian lattice
-  Cell,   // r[n] = sum_q f_q int_{cell q} phi(x - x_n) dx / |det L|
+  Aligned,  // the point rule on the aligned grid the samples are interpolated onto
+  Point,    // r[n] = (dx dy / |det L|) sum_q f_q phi(x_q - x_n), as on the Cartesian lattice
+  Cell,     // r[n] = sum_q f_q int_{cell q} phi(x - x_n) dx / |det L|
 };
-HexQuadrature parse_hex_quadrature(const std::string& spelling);  // "point" | "cell"
+// "aligned" | "point" | "cell"
+HexQuadrature parse_hex_quadrature(const std::string& spelling);
 std::string hex_quadrature_name(HexQuadrature q);
 
 class HexAcquisitionPlan {
  public:
   HexAcquisitionPlan(long input_width, long input_height, int channels, double image_width,
                      double image_height, const HexLayout& layout, int order, Boundary boundary,
-                     HexQuadrature quadrature = HexQuadrature::Point);
+                     HexQuadrature quadrature = HexQuadrature::Aligned);
 
   long input_width() const { return win_; }
   long input_height() const { return hin_; }
@@ -68,6 +86,28 @@ class HexAcquisitionPlan {
   // Extended rows (boundary images) of input row k, increasing.
   const std::vector<long>& row_images(long k) const { return images_[k]; }
 
+  // The aligned grid (HexQuadrature::Aligned; empty otherwise).
+  struct AlignedGrid {
+    int s1 = 0, s2 = 0;  // aligned columns per step, rows per lattice row
+    long m0 = 0;         // first aligned column held: X_m0
+    long columns = 0;    // aligned columns held
+    // Per held column: the extended input column (minus first_column()) of
+    // its first of 4 Lagrange taps, and the taps' weights.
+    std::vector<long> x_first;
+    std::vector<std::array<double, 4>> x_weight;
+    int half = 0;   // table half width in columns, n s1
+    int reach = 0;  // table half height in rows: |dr| < reach = n s2
+    // weight of aligned offset (t, dr) from a lattice point:
+    // table[(dr + reach - 1) * (2 half + 1) + t + half] = M_n / (s1 s2)
+    std::vector<double> table;
+    std::vector<int> first, last;  // per table row: its first and last nonzero t + half
+    // The aligned rows r whose vertical taps include extended row e, with
+    // the tap's weight, r increasing.
+    void rows_of(long e, double dy, double oy, double row_step,
+                 std::vector<std::pair<long, double>>& out) const;
+  };
+  const AlignedGrid& aligned() const { return aligned_; }
+
  private:
   long win_, hin_;
   int channels_;
@@ -79,6 +119,8 @@ class HexAcquisitionPlan {
   long q0_ = 0;
   std::vector<long> colmap_;
   std::vector<std::vector<long>> images_;
+  AlignedGrid aligned_;
+  void init_aligned();
 };
 
 // Streams rows through a plan: the whole image in order (add_rows), or band
@@ -170,6 +212,11 @@ class HexAcquisition {
   void add_in_order(long y0, long y1, const T* rows);
   template <typename T>
   void extend(long y0, long y1, const T* rows, std::vector<T>& ext, int threads) const;
+  // The aligned rule's strip: rows [y0, y1) interpolated onto the aligned
+  // columns, kept in the samples' own type.
+  template <typename T>
+  void interpolate(long y0, long y1, const T* rows, std::vector<T>& out, int threads) const;
+  std::size_t strip_row_size() const;  // values per strip row as accumulate() takes them
   // The coefficient rows rows [y0, y1) reach, in increasing order.
   std::vector<long> reached(long y0, long y1) const;
   // Adds the terms of the extended rows [y0, y1) to the coefficient rows js.

@@ -26,7 +26,7 @@ struct Settings {
   std::string size;              // "WxH" ("" : none)
   std::string generator = "cubic", method = "min-error", display, boundary = "mirror";
   std::string nonfinite = "error", prefilter = "fft", clamp = "none";
-  std::string lattice = "cartesian", quadrature = "point";
+  std::string lattice = "cartesian", quadrature = "aligned";
   double density = 1.0;
   std::string density_spelling;  // as given ("" : the number)
   bool highlight_compress = false;

@@ -123,7 +123,7 @@ def project(input: Input, *, size: Optional[Size] = None, factor: Optional[float
         min-error, centred for conventional.
     boundary: "mirror" or "periodic".
     lattice: "cartesian" or "hex"; density (hex: lattice points per output
-        pixel, None: 1) and quadrature (hex: "point" or "cell", None: point).
+        pixel, None: 1) and quadrature (hex: "aligned", "point" or "cell", None: aligned).
     nonfinite: "error" or "zero" (NaN/Inf samples replaced by 0, with a
         RuntimeWarning).
     prefilter: "fft" or "recursive". clamp: "none", "zero" or "local".
