@@ -241,8 +241,9 @@ def chart_noise(noise, path):
     ms = [r["method"] for r in noise["methods"]]
     fig, ax = plt.subplots(figsize=(8, 4))
     x = range(len(ms))
-    ax.bar([i - 0.2 for i in x], [r["gain"] for r in noise["methods"]], 0.4, label="measured")
-    ax.bar([i + 0.2 for i in x], [r["theory"] for r in noise["methods"]], 0.4, label="theory")
+    ax.bar([i - 0.27 for i in x], [r["gain"] for r in noise["methods"]], 0.27, label="measured")
+    ax.bar([i for i in x], [r["discrete"] for r in noise["methods"]], 0.27, label="exact (discrete operator)")
+    ax.bar([i + 0.27 for i in x], [r["theory"] for r in noise["methods"]], 0.27, label="continuous theory")
     ax.set_xticks(list(x))
     ax.set_xticklabels(ms, rotation=30, ha="right")
     ax.set_ylabel("output variance / (σ² / s²)")
@@ -354,8 +355,10 @@ share their error; a conventional method's f_app is sum p[n] FILTER(x - x_n). Sm
 <p>Seeded white noise (σ = {noise['sigma']}) on the samples of a flat {noise['size']}×{noise['size']} image at factor
 {noise['factor']}; gain = output variance / (σ²/s²), the variance of a pixel's box average. Theory: docs/design.md
 section 6 (min-error: (1/π)∫|D(ω)|²/A(ω)dω per axis for display transfer D; conventional: s·Σw²/(Σw)² per
-axis) (<a href="noise.csv">noise.csv</a>).</p>
-{table(noise['methods'], ['method', 'gain', 'theory'], {'gain': g, 'theory': g})}
+axis), which models the sampling as continuous; exact: the gain of the discrete operator the code applies,
+s² times the sum over the s² sample phases of each impulse response's squares; sd: the measurement's standard
+deviation, from the outputs' correlation (<a href="noise.csv">noise.csv</a>).</p>
+{table(noise['methods'], ['method', 'gain', 'discrete', 'measurement_sd', 'theory'], {'gain': g, 'discrete': g, 'measurement_sd': g, 'theory': g})}
 <img src="noise.png" alt="noise gain">
 <h2>Edges</h2>
 <p>Step response of a unit edge (exact for min-error; measured at factor 16 for the conventional filters)

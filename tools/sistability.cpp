@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "sis/engine.h"
+#include "sis/metrics.h"
 #include "sis/projection.h"
 #include "sis/range.h"
 
@@ -95,12 +96,12 @@ double conventional_theory(const Kernel& k, int s) {
   return std::pow(s * sw2 / (sw * sw), 2);
 }
 
-double variance(const float* v, std::size_t n) {
+double variance(const std::vector<double>& v) {
   double m = 0, q = 0;
-  for (std::size_t i = 0; i < n; ++i) m += v[i];
-  m /= n;
-  for (std::size_t i = 0; i < n; ++i) q += (v[i] - m) * (v[i] - m);
-  return q / (n - 1);
+  for (double x : v) m += x;
+  m /= double(v.size());
+  for (double x : v) q += (x - m) * (x - m);
+  return q / double(v.size() - 1);
 }
 
 std::string num(double v) {
@@ -133,12 +134,17 @@ int main(int argc, char** argv) {
                     ", \"seed\": " + std::to_string(seed) + ", \"sigma\": " + num(sigma) + ", \"methods\": [";
   bool first = true;
   for (const MethodSpec& m : methods()) {
-    const Image p = final_image(project_noise(in, N, N, m, Boundary::Periodic), m.display, N, N);
-    const double gain = variance(p.data.data(), p.data.size()) / unit;
+    auto apply = [&](const Image& samples) {
+      const Image p = final_image(project_noise(samples, N, N, m, Boundary::Periodic), m.display, N, N);
+      return std::vector<double>(p.data.begin(), p.data.end());
+    };
+    const double gain = variance(apply(in)) / unit;
+    const DiscreteNoiseGain exact = discrete_noise_gain(apply, N, s);
     const double theory = m.method == Method::MinError ? min_error_theory(m.kernel.degree(), m.display)
                                                        : conventional_theory(m.kernel, s);
     out += std::string(first ? "" : ", ") + "{\"method\": \"" + m.name + "\", \"gain\": " + num(gain) +
-           ", \"theory\": " + num(theory) + "}";
+           ", \"discrete\": " + num(exact.gain) + ", \"measurement_sd\": " +
+           num(exact.relative_sd * exact.gain) + ", \"theory\": " + num(theory) + "}";
     first = false;
   }
   out += "]}, \"step\": [";

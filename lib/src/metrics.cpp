@@ -647,6 +647,39 @@ double zoneplate_l2_error(const Coefficients& coefficients, double K, int sample
   return rms_of(app_energy(p, k.c), cross, energy, p.count(C));
 }
 
+DiscreteNoiseGain discrete_noise_gain(const std::function<std::vector<double>(const Image&)>& apply,
+                                      long N, int s) {
+  if (N < 8 || s < 1)
+    throw std::invalid_argument("discrete_noise_gain(): frame " + std::to_string(N) +
+                                " or factor " + std::to_string(s) + " too small");
+  const long L = 12, c = N / 2, reach = std::min(3 * L, N / 2 - 1);
+  double sum = 0;
+  std::vector<double> R((2 * L + 1) * (2 * L + 1), 0.0);
+  for (long b = 0; b < s; ++b)
+    for (long a = 0; a < s; ++a) {
+      Image impulse(N * s, N * s, 1);
+      impulse.at(c * s + a, c * s + b, 0) = 1.0f;
+      const std::vector<double> out = apply(impulse);
+      if (long(out.size()) != N * N)
+        throw std::invalid_argument("discrete_noise_gain(): apply() returned " +
+                                    std::to_string(out.size()) + " values, not " +
+                                    std::to_string(N * N));
+      for (double v : out) sum += v * v;
+      auto at = [&](long x, long y) { return out[((y + N) % N) * N + (x + N) % N]; };
+      for (long ky = -L; ky <= L; ++ky)
+        for (long kx = -L; kx <= L; ++kx) {
+          double r = 0;
+          for (long y = c - reach; y <= c + reach; ++y)
+            for (long x = c - reach; x <= c + reach; ++x) r += at(x, y) * at(x + kx, y + ky);
+          R[(ky + L) * (2 * L + 1) + kx + L] += r;
+        }
+    }
+  const double r0 = R[L * (2 * L + 1) + L];
+  double rho2 = 0;
+  for (double r : R) rho2 += (r / r0) * (r / r0);
+  return {double(s) * s * sum, std::sqrt(2 * rho2) / double(N)};
+}
+
 double zoneplate(double K, double W, double H, double x, double y) {
   const double u = x / W - 0.5, v = y / H - 0.5;
   return 0.5 + 0.5 * std::cos(K * (u * u + v * v));
