@@ -292,12 +292,18 @@ compare: $(if $(PREBUILT),,build)
 	  --border $(COMPARE_BORDER) --cutoffs '$(CUTOFFS)' --repeats $(COMPARE_REPEATS) \
 	  --zp-nyquist $(ZP_NYQUIST) \
 	  $(foreach m,$(METHODS),--method '$(m)=$(METHOD_OPTS_$(m))')
-# make compare-hex: the hexagonal lattice against the Cartesian one at equal
-# coefficient count (density 1), every scene, factors 2 and 4: $(OUT)/report/hex/.
+# make compare-hex [QUICK=1]: the hexagonal lattice against the Cartesian one
+# (scripts/compare_hex.py): the smooth analytic image, the zone plate (whole
+# frame and inscribed disk), objects and edges; hex hat and quartic at several
+# densities against the tent and cubic at one coefficient per pixel, factors
+# 2, 4 and 8; the density where they meet. $(OUT)/report/hex/ (QUICK:
+# $(OUT)/report-quick/hex/, 64 x 64, factors 2 and 4, a few seconds).
 .PHONY: compare-hex
-compare-hex:
-	@$(MAKE) compare METHODS="me-tent me-cubic hex-hat hex-quartic" COMPARE_FACTORS="2 4" \
-	  COMPARE_AA=am1-r2 COMPARE_REPEATS=1 COMPARE_REPORT=$(OUT)/report/hex
+compare-hex: $(if $(PREBUILT),,build)
+	@test -x $(PYTHON) || { echo "compare-hex: $(PYTHON) not found: run scripts/setup.sh (make setup)" >&2; exit 1; }
+	@$(PYTHON) scripts/compare_hex.py --work $(OUT)/compare-hex$(if $(QUICK),-quick) \
+	  --report $(OUT)/$(if $(QUICK),report-quick,report)/hex \
+	  $(if $(QUICK),--res 64 --factors "2 4" --ref-factor 8 --spp 8 --border 8)
 # ==== end of comparison ========================================================
 
 # ---- bench: siproject against oiiotool, splineops and the decode floor ---------

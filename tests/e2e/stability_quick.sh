@@ -3,9 +3,10 @@
 #
 # End-to-end test of the stability study (ctest label e2e): runs
 # scripts/stability.py --quick into a temporary folder and checks that every
-# file the page names exists, that every method has finite numbers, that the
-# noise gains are within 15 % of theory (the quick image is small: 64 x 64,
-# so the variance estimate itself scatters by a few per cent), and that on the
+# file the page names exists, that every method has finite numbers, that each
+# measured noise gain lies within 4 standard deviations of the discrete
+# operator's exact gain and that gain within 7 % of the continuous theory
+# (the tent at factor 4 is off by 6.5 %), and that on the
 # HDR scene clamping at zero leaves no negative pixel while the plain
 # min-error cubic has some.
 set -euo pipefail
@@ -30,7 +31,10 @@ assert finite(r), "a number is not finite"
 methods = {"box", "conv-tent", "mitchell", "me-tent", "me-cubic", "me-tent-2x2", "me-cubic-2x2"}
 assert {e["method"] for e in r["edges"]} == methods, "edges: a method is missing"
 for n in r["synthetic"]["noise"]["methods"]:
-    assert abs(n["gain"] / n["theory"] - 1) < 0.15, f"noise gain off theory: {n}"
+    # the seeded measurement scatters about the discrete operator's exact gain
+    # by its standard deviation (from the outputs' correlation)
+    assert abs(n["gain"] - n["discrete"]) < 4 * n["measurement_sd"], f"noise gain off the exact gain: {n}"
+    assert abs(n["discrete"] / n["theory"] - 1) < 0.07, f"exact gain far from the continuous theory: {n}"
 hdr = {(h["method"], h["remedy"]): h for h in r["hdr"]}
 assert hdr[("me-cubic", "none")]["negative_pixels"] > 0, "plain min-error cubic shows no negatives"
 assert hdr[("me-cubic", "clamp zero")]["negative_pixels"] == 0, "clamp zero left negatives"
