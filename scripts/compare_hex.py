@@ -22,9 +22,9 @@ writes half-precision EXR, whose rounding (2.4e-4 at 0.5) would dominate
 errors of 1e-5.
 
 Methods (min-error, mirror rule): the Cartesian tent and cubic at one
-coefficient per output pixel; the hex hat and hex quartic (aligned
-quadrature) at each DENSITY, lattice points per output pixel (0.866 is the
-13.4 % fewer the hexagonal lattice promises for an isotropic band limit).
+coefficient per output pixel; the hex hat and hex quartic at each DENSITY,
+lattice points per output pixel (0.866 is the 13.4 % fewer the hexagonal
+lattice promises for an isotropic band limit).
 
 Measures: the continuous L2 error of f_app, BORDER output pixels left out
 along each edge (siproject.Reference); the projection's time in this process
@@ -129,7 +129,7 @@ def methods(densities):
     out = [(g, 1.0, dict(generator=g)) for g in ("tent", "cubic")]
     for g, _ in PAIRS:
         for d in densities:
-            out.append((g, d, dict(lattice="hex", generator=g, density=d, quadrature="aligned")))
+            out.append((g, d, dict(lattice="hex", generator=g, density=d)))
     return out
 
 
@@ -252,7 +252,7 @@ def page(rows, der, cfg, images):
          f"<p>{cfg.res} x {cfg.res} output pixels, factors {', '.join(f'{s:g}' for s in cfg.factors)}, "
          f"continuous L2 error with a {cfg.border}-pixel border left out; hex at densities "
          f"{', '.join(f'{d:g}' for d in cfg.densities)} lattice points per output pixel (0.866: 13.4 % fewer "
-         "coefficients), aligned quadrature; Cartesian at one coefficient per output pixel. Made by "
+         "coefficients); Cartesian at one coefficient per output pixel. Made by "
          "<code>make compare-hex</code> (scripts/compare_hex.py).</p>",
          "<h2>Where the hexagonal lattice meets the Cartesian error</h2>",
          "<table><tr><th>image</th><th>factor</th><th>pair</th><th>hex / Cartesian error at equal count</th>"

@@ -31,12 +31,10 @@ class HexSiproject : public TempDirTest {};
 
 // What siproject computes: the library's projection with the coefficients
 // rounded to float, as the tool keeps them.
-Coefficients library(const Image& in, double W, double H, int order, double density,
-                     HexQuadrature quadrature = HexQuadrature::Aligned) {
+Coefficients library(const Image& in, double W, double H, int order, double density) {
   HexProjectionOptions o;
   o.order = order;
   o.density = density;
-  o.quadrature = quadrature;
   Coefficients k = project_hexagonal(in, W, H, o);
   for (double& v : k.c.data) v = static_cast<float>(v);
   return k;
@@ -69,18 +67,6 @@ TEST_F(HexSiproject, AgreesWithTheLibrary) {
             0);
   EXPECT_EQ(read_image(path("q.exr")).data,
             resample(library(in, 16, 12, 2, 1.0), Display::antialiased_2x2(), 16, 12).data);
-  // the point quadrature
-  ASSERT_EQ(run(path("in.exr") + " -o " + path("q.exr") + " --factor 4 -q --lattice hex --quadrature point").status,
-            0);
-  EXPECT_EQ(read_image(path("q.exr")).data,
-            resample(library(in, 16, 12, 2, 1.0, HexQuadrature::Point), Display::antialiased_2x2(), 16, 12).data);
-  // the cell quadrature
-  ASSERT_EQ(run(path("in.exr") + " -o " + path("q.exr") +
-                " --factor 4 -q --lattice hex --generator hex-hat --quadrature cell").status,
-            0);
-  EXPECT_EQ(read_image(path("q.exr")).data,
-            resample(library(in, 16, 12, 1, 1.0, HexQuadrature::Cell), Display::antialiased_2x2(),
-                     16, 12).data);
 }
 
 TEST_F(HexSiproject, CoefficientRoundTripEqualsDirectResult) {
@@ -128,8 +114,6 @@ TEST_F(HexSiproject, UsageErrors) {
       {"--lattice square", "--lattice 'square'"},
       {"--density 2", "--density applies to --lattice hex"},
       {"--lattice hex --density 0", "--density"},
-      {"--quadrature cell", "--quadrature applies to --lattice hex"},
-      {"--lattice hex --quadrature midpoint", "unknown quadrature 'midpoint'"},
   };
   for (const Case& c : cases) {
     const Result r = run(base + c.args);

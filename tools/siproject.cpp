@@ -196,7 +196,6 @@ int run(const Options& o) {
     }
   }
   const double t_resample = f.resample_seconds;
-  const bool from_samples = !f.from_coefficient_file;
   f.local_range.reset();  // what is no longer needed goes before the output is written
 
   const Metadata md = {
@@ -246,10 +245,9 @@ int run(const Options& o) {
     if (space_of(k) == SpaceKind::Hexagonal)
       std::fprintf(stderr,
                    "siproject: hexagonal lattice, %.6g points per output pixel (step %.6g), "
-                   "%ld x %ld offset-row coefficients over the frame and its margin%s\n",
+                   "%ld x %ld offset-row coefficients over the frame and its margin\n",
                    1.0 / std::abs(k.lattice.determinant()), k.lattice.matrix()[0], k.c.width,
-                   k.c.height,
-                   from_samples ? (", " + hex_quadrature_name(r.space.quadrature) + " quadrature").c_str() : "");
+                   k.c.height);
     std::fprintf(stderr, "siproject: output range [%g, %g], %ld negative samples", before.min,
                  before.max, before.negative);
     if (own_range)
@@ -300,13 +298,6 @@ int main(int argc, char** argv) {
                              "cartesian (coefficients on the output pixels) or hex (a hexagonal "
                              "lattice, min-error, resampled to the output pixels)")
                   ->capture_default_str();
-  auto* quad = app.add_option("--quadrature", o.settings.quadrature,
-                              "--lattice hex: the inner products from the samples: aligned (the "
-                              "samples interpolated onto a grid aligned with the lattice, then "
-                              "summed: exact for the polynomials the generator reproduces), point "
-                              "(each sample a point, as on the Cartesian lattice) or cell (each "
-                              "sample the value over its cell)")
-                   ->capture_default_str();
   auto* dens = app.add_option("--density", o.settings.density,
                               "--lattice hex: lattice points per output pixel (at most one "
                               "per input sample)")
@@ -348,7 +339,6 @@ int main(int argc, char** argv) {
   st.boundary_given = b->count() > 0;
   st.lattice_given = lat->count() > 0;
   st.density_given = dens->count() > 0;
-  st.quadrature_given = quad->count() > 0;
   if (fac->count() > 0) {
     st.factor = factor;
     st.factor_spelling = fac->as<std::string>();

@@ -554,7 +554,7 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
     const HexLayout layout =
         hex_layout(density, double(W), double(H), hex_default_margin(rq.space.hex_order));
     const HexAcquisitionPlan plan(in.width, in.height, C, double(W), double(H), layout,
-                                  rq.space.hex_order, rq.boundary, rq.space.quadrature);
+                                  rq.space.hex_order, rq.boundary);
     HexAcquisition hexagonal(plan, threads);
     p.local_range =
         std::make_unique<LocalRange>(in.width, in.height, C, W, H, hexagonal.bands().band_rows());

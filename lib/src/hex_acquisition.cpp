@@ -11,22 +11,6 @@
 
 namespace sis {
 
-HexQuadrature parse_hex_quadrature(const std::string& s) {
-  if (s == "aligned") return HexQuadrature::Aligned;
-  if (s == "point") return HexQuadrature::Point;
-  if (s == "cell") return HexQuadrature::Cell;
-  throw std::invalid_argument("unknown quadrature '" + s + "' (expected aligned, point or cell)");
-}
-
-std::string hex_quadrature_name(HexQuadrature q) {
-  switch (q) {
-    case HexQuadrature::Aligned: return "aligned";
-    case HexQuadrature::Point: return "point";
-    case HexQuadrature::Cell: return "cell";
-  }
-  return "?";
-}
-
 namespace {
 // 4-point Lagrange interpolation at fraction f in [0, 1) between taps 0 and
 // 1 of the taps -1, 0, 1, 2: reproduces every cubic.
@@ -57,8 +41,7 @@ void HexAcquisitionPlan::AlignedGrid::rows_of(long e, double dy, double oy, doub
 
 HexAcquisitionPlan::HexAcquisitionPlan(long input_width, long input_height, int channels,
                                        double image_width, double image_height,
-                                       const HexLayout& layout, int order, Boundary boundary,
-                                       HexQuadrature quadrature)
+                                       const HexLayout& layout, int order, Boundary boundary)
     : win_(input_width),
       hin_(input_height),
       channels_(channels),
@@ -66,8 +49,7 @@ HexAcquisitionPlan::HexAcquisitionPlan(long input_width, long input_height, int 
       image_h_(image_height),
       layout_(layout),
       spline_(&BoxSpline::hexagonal(order)),
-      boundary_(boundary),
-      quadrature_(quadrature) {
+      boundary_(boundary) {
   if (input_width < 1 || input_height < 1 || channels < 1 || !(image_width > 0) ||
       !(image_height > 0)) {
     std::ostringstream m;
@@ -81,27 +63,7 @@ HexAcquisitionPlan::HexAcquisitionPlan(long input_width, long input_height, int 
                                 "hexagonal lattice");
   dx_ = image_width / input_width;
   dy_ = image_height / input_height;
-  scale_ = dx_ * dy_ / std::abs(layout.lattice.determinant());
-  const double n = spline_->radius(), h = layout.step(), hy = layout.row_step();
-  const Vec2 o = layout.lattice.origin();
-  if (quadrature == HexQuadrature::Aligned) {
-    init_aligned();
-    return;
-  }
-  // Extended columns: every sample (with the cell rule: every cell) meeting
-  // some coefficient's support.
-  const bool cell = quadrature == HexQuadrature::Cell;
-  const double rx = n * h + (cell ? 0.5 * dx_ : 0.0), ry = n * hy + (cell ? 0.5 * dy_ : 0.0);
-  const double xmin = o.x - rx, xmax = o.x + h * (layout.columns - 0.5) + rx;
-  q0_ = static_cast<long>(std::ceil(xmin / dx_ - 0.5));
-  const long q1 = static_cast<long>(std::floor(xmax / dx_ - 0.5));
-  for (long q = q0_; q <= q1; ++q) colmap_.push_back(extend_index(q, win_, boundary));
-  // Extended rows, grouped by the input row they copy.
-  const double ymin = o.y - ry, ymax = o.y + hy * (layout.rows - 1) + ry;
-  const long e0 = static_cast<long>(std::ceil(ymin / dy_ - 0.5));
-  const long e1 = static_cast<long>(std::floor(ymax / dy_ - 0.5));
-  images_.resize(hin_);
-  for (long e = e0; e <= e1; ++e) images_[extend_index(e, hin_, boundary)].push_back(e);
+  init_aligned();
 }
 
 void HexAcquisitionPlan::init_aligned() {
@@ -165,39 +127,6 @@ void HexAcquisitionPlan::init_aligned() {
 
 namespace {
 constexpr long kHexBandRows = 256;  // as kBandRows: the bands the files are read in
-
-// The point rule along one sample row for one coefficient: a[c] += scale *
-// s(t) * src[q][c] for its m samples at t = t0, t0 + step, ... (t by repeated
-// addition), those outside the slice's support skipped. The slice's degree
-// (3 order - 2) and the channel count (CC, 0 = C at run time) are fixed at
-// compile time; t only grows, so the piece is found by stepping forward.
-template <int Order, int CC, typename S>
-void slice_terms(const BoxSplineSlice& s, double t, double step, double scale, long m,
-                 const S* src, double* a, int C) {
-  constexpr int D = 3 * Order - 2;
-  const int Cn = CC > 0 ? CC : C;
-  const double hw = s.half_width;
-  double sum[CC > 0 ? CC : 1];
-  if constexpr (CC > 0)
-    for (int c = 0; c < CC; ++c) sum[c] = a[c];
-  int p = 0;
-  for (long q = 0; q < m; ++q, t += step, src += Cn) {
-    if (!(std::abs(t) < hw)) continue;
-    while (p + 1 < s.pieces && t >= s.lo[p + 1]) ++p;
-    const double w = t - s.shift[p];
-    const auto& k = s.coef[p];
-    double y = k[D];
-    for (int d = D - 1; d >= 0; --d) y = y * w + k[d];
-    const double wgt = scale * y;
-    if constexpr (CC > 0) {
-      for (int c = 0; c < CC; ++c) sum[c] += wgt * src[c];
-    } else {
-      for (int c = 0; c < Cn; ++c) a[c] += wgt * src[c];
-    }
-  }
-  if constexpr (CC > 0)
-    for (int c = 0; c < CC; ++c) a[c] = sum[c];
-}
 }  // namespace
 
 HexAcquisition::HexAcquisition(const HexAcquisitionPlan& plan, int threads, long band_rows)
@@ -216,57 +145,26 @@ HexAcquisition::~HexAcquisition() = default;
 
 std::vector<long> HexAcquisition::reached(long y0, long y1) const {
   const HexLayout& L = plan_.layout();
-  const BoxSpline& B = plan_.generator();
   const long R = L.rows;
-  const double n = B.radius(), hy = L.row_step(), dy = plan_.sample_dy();
+  const double hy = L.row_step(), dy = plan_.sample_dy();
   const Vec2 o = L.lattice.origin();
-  const bool cell = plan_.quadrature() == HexQuadrature::Cell;
-  const double cv = cell ? 0.5 * dy / hy : 0.0;
+  const auto& g = plan_.aligned();
   std::vector<char> touched(R, 0);
-  if (plan_.quadrature() == HexQuadrature::Aligned) {
-    const auto& g = plan_.aligned();
-    std::vector<std::pair<long, double>> rows;
-    for (long k = y0; k < y1; ++k)
-      for (long e : plan_.row_images(k)) {
-        g.rows_of(e, dy, o.y, hy, rows);
-        for (const auto& [r, w] : rows) {
-          // lattice rows j with |r - s2 j| < reach
-          const long j0 = std::max(0L, static_cast<long>(std::floor(double(r - g.reach) / g.s2)) + 1);
-          const long j1 = std::min(R - 1, static_cast<long>(std::ceil(double(r + g.reach) / g.s2)) - 1);
-          for (long j = j0; j <= j1; ++j) touched[j] = 1;
-        }
-      }
-  } else
+  std::vector<std::pair<long, double>> rows;
   for (long k = y0; k < y1; ++k)
     for (long e : plan_.row_images(k)) {
-      const double u = ((e + 0.5) * dy - o.y) / hy;
-      const long j0 = std::max(0L, static_cast<long>(std::floor(u - n - cv)));
-      const long j1 = std::min(R - 1, static_cast<long>(std::ceil(u + n + cv)));
-      for (long j = j0; j <= j1; ++j) touched[j] = 1;
+      g.rows_of(e, dy, o.y, hy, rows);
+      for (const auto& [r, w] : rows) {
+        // lattice rows j with |r - s2 j| < reach
+        const long j0 = std::max(0L, static_cast<long>(std::floor(double(r - g.reach) / g.s2)) + 1);
+        const long j1 = std::min(R - 1, static_cast<long>(std::ceil(double(r + g.reach) / g.s2)) - 1);
+        for (long j = j0; j <= j1; ++j) touched[j] = 1;
+      }
     }
   std::vector<long> work;
   for (long j = 0; j < R; ++j)
     if (touched[j]) work.push_back(j);
   return work;
-}
-
-template <typename T>
-void HexAcquisition::extend(long y0, long y1, const T* rows, std::vector<T>& ext,
-                            int threads) const {
-  const int C = plan_.channels();
-  const long win = plan_.input_width();
-  const std::vector<long>& colmap = plan_.column_source();
-  const long wext = static_cast<long>(colmap.size());
-  const std::size_t erow = std::size_t(wext) * C;
-  ext.resize(erow * (y1 - y0));
-  parallel_for(y1 - y0, threads, [&](long r0, long r1) {
-    for (long r = r0; r < r1; ++r) {
-      const T* in = rows + std::size_t(r) * win * C;
-      T* out = ext.data() + erow * r;
-      for (long q = 0; q < wext; ++q)
-        for (int c = 0; c < C; ++c) out[std::size_t(q) * C + c] = in[std::size_t(colmap[q]) * C + c];
-    }
-  });
 }
 
 template <typename T>
@@ -295,15 +193,13 @@ void HexAcquisition::interpolate(long y0, long y1, const T* rows, std::vector<T>
 }
 
 std::size_t HexAcquisition::strip_row_size() const {
-  const std::size_t C = plan_.channels();
-  return plan_.quadrature() == HexQuadrature::Aligned ? std::size_t(plan_.aligned().columns) * C
-                                                      : plan_.column_source().size() * C;
+  return std::size_t(plan_.aligned().columns) * plan_.channels();
 }
 
 namespace {
-// The aligned rule: coefficient row j takes, from each extended row e of the
-// strip (interpolated along x onto the aligned columns), the table rows of
-// the aligned rows e serves weighted by e's vertical tap: one row of
+// Coefficient row j takes, from each extended row e of the strip
+// (interpolated along x onto the aligned columns), the table rows of the
+// aligned rows e serves weighted by e's vertical tap: one row of at most
 // 2 half + 1 weights, applied at every lattice point of the row.
 template <int CC, typename S>
 void aligned_terms(const double* u, int n, const S* src, double* a, int C) {
@@ -330,129 +226,43 @@ void HexAcquisition::accumulate(const S* strip, long y0, long y1, const std::vec
                                 int threads) {
   if (work.empty()) return;
   const HexLayout& L = plan_.layout();
-  const BoxSpline& B = plan_.generator();
   const int C = plan_.channels();
   const long Q = L.columns;
-  const double n = B.radius(), h = L.step(), hy = L.row_step(), dx = plan_.sample_dx(),
-               dy = plan_.sample_dy(), scale = plan_.quadrature_weight();
+  const double hy = L.row_step(), dy = plan_.sample_dy();
   const Vec2 o = L.lattice.origin();
-  const long q0 = plan_.first_column();
-  const std::vector<long>& colmap = plan_.column_source();
-  const long qlast = q0 + static_cast<long>(colmap.size()) - 1;
   const std::size_t erow = strip_row_size();
-  if (plan_.quadrature() == HexQuadrature::Aligned) {
-    const auto& g = plan_.aligned();
-    const int wt = 2 * g.half + 1;
-    auto rows_into = [&](auto channels) {
-      constexpr int CC = decltype(channels)::value;
-      const int Cn = CC > 0 ? CC : C;
-      parallel_for(static_cast<long>(work.size()), threads, [&](long w0, long w1) {
-        std::vector<std::pair<long, double>> rows;
-        std::vector<double> u(wt);
-        for (long w = w0; w < w1; ++w) {
-          const long j = work[w];
-          double* acc = acc_.row(j);
-          const long shift = (g.s1 / 2) * (j & 1);
-          for (long k = y0; k < y1; ++k) {
-            const S* hk = strip + erow * (k - y0);
-            for (long e : plan_.row_images(k)) {
-              g.rows_of(e, dy, o.y, hy, rows);
-              std::fill(u.begin(), u.end(), 0.0);
-              int lo = wt, hi = -1;  // the nonzero taps of u
-              for (const auto& [r, ly] : rows) {
-                const long dr = r - long(g.s2) * j;
-                if (dr <= -g.reach || dr >= g.reach || ly == 0.0) continue;
-                const std::size_t row = std::size_t(dr + g.reach - 1);
-                const double* t = g.table.data() + row * wt;
-                for (int q = g.first[row]; q <= g.last[row]; ++q) u[q] += ly * t[q];
-                lo = std::min(lo, g.first[row]);
-                hi = std::max(hi, g.last[row]);
-              }
-              if (hi < lo) continue;
-              for (long i = 0; i < Q; ++i)
-                aligned_terms<CC>(u.data() + lo, hi - lo + 1,
-                                  hk + std::size_t(g.s1 * i + shift + lo) * Cn,
-                                  acc + std::size_t(i) * Cn, Cn);
-            }
-          }
-        }
-      });
-    };
-    switch (C) {
-      case 1: rows_into(std::integral_constant<int, 1>()); break;
-      case 3: rows_into(std::integral_constant<int, 3>()); break;
-      case 4: rows_into(std::integral_constant<int, 4>()); break;
-      default: rows_into(std::integral_constant<int, 0>()); break;
-    }
-    return;
-  }
-  // Half a cell in steps and rows (cell rule), zero for the point rule.
-  const bool cell = plan_.quadrature() == HexQuadrature::Cell;
-  const double ct = cell ? 0.5 * dx / h : 0.0, cv = cell ? 0.5 * dy / hy : 0.0;
-  // Each coefficient row adds the strip's rows (and their boundary images) in
-  // its support, in order; a fixed channel count lets the inner loop unroll.
+  const auto& g = plan_.aligned();
+  const int wt = 2 * g.half + 1;
   auto rows_into = [&](auto channels) {
     constexpr int CC = decltype(channels)::value;
     const int Cn = CC > 0 ? CC : C;
     parallel_for(static_cast<long>(work.size()), threads, [&](long w0, long w1) {
-      BoxSplineSlice s;
-      BoxSplineBand band;
-      const double inv_h = 1.0 / h, step = dx / h;
-      // The strip columns [qa, qb] whose sample centres lie within reach of xn.
-      auto columns = [&](double xn, double reach) {
-        return std::pair<long, long>(
-            std::max(q0, static_cast<long>(std::ceil((xn - reach) / dx - 0.5))),
-            std::min(qlast, static_cast<long>(std::floor((xn + reach) / dx - 0.5))));
-      };
+      std::vector<std::pair<long, double>> rows;
+      std::vector<double> u(wt);
       for (long w = w0; w < w1; ++w) {
         const long j = work[w];
         double* acc = acc_.row(j);
-        const double yj = o.y + hy * j, xj = o.x + 0.5 * h * double(j & 1);
+        const long shift = (g.s1 / 2) * (j & 1);
         for (long k = y0; k < y1; ++k) {
-          const S* ext = strip + erow * (k - y0);
+          const S* hk = strip + erow * (k - y0);
           for (long e : plan_.row_images(k)) {
-            const double v = ((e + 0.5) * dy - yj) / hy;
-            if (cell) {
-              // weight of sample q: the integral of M over its cell in (t, v),
-              // Y(right edge) - Y(left edge) of the band [v - cv, v + cv]
-              if (!(std::abs(v) < n + cv)) continue;
-              band.build(B, v - cv, v + cv);
-              if (band.empty()) continue;
-              const double reach = (n + ct) * h;
-              for (long i = 0; i < Q; ++i) {
-                const double xn = xj + h * i;
-                const auto [qa, qb] = columns(xn, reach);
-                double* a = acc + std::size_t(i) * Cn;
-                double t = (qa * dx - xn) * inv_h;  // left edge of cell qa
-                std::size_t hint = 0;
-                double left = band.antiderivative(t, hint);
-                for (long q = qa; q <= qb; ++q) {
-                  t += step;
-                  const double right = band.antiderivative(t, hint);
-                  const double wgt = right - left;
-                  left = right;
-                  const S* src = ext + std::size_t(q - q0) * Cn;
-                  for (int c = 0; c < Cn; ++c) a[c] += wgt * src[c];
-                }
-              }
-              continue;
+            g.rows_of(e, dy, o.y, hy, rows);
+            std::fill(u.begin(), u.end(), 0.0);
+            int lo = wt, hi = -1;  // the nonzero taps of u
+            for (const auto& [r, ly] : rows) {
+              const long dr = r - long(g.s2) * j;
+              if (dr <= -g.reach || dr >= g.reach || ly == 0.0) continue;
+              const std::size_t row = std::size_t(dr + g.reach - 1);
+              const double* t = g.table.data() + row * wt;
+              for (int q = g.first[row]; q <= g.last[row]; ++q) u[q] += ly * t[q];
+              lo = std::min(lo, g.first[row]);
+              hi = std::max(hi, g.last[row]);
             }
-            if (!(std::abs(v) < n)) continue;
-            B.slice(v, s);
-            const double reach = s.half_width * h;
-            for (long i = 0; i < Q; ++i) {
-              const double xn = xj + h * i;
-              const auto [qa, qb] = columns(xn, reach);
-              const double t0 = ((qa + 0.5) * dx - xn) * inv_h;
-              double* a = acc + std::size_t(i) * Cn;
-              const S* src = ext + std::size_t(qa - q0) * Cn;
-              const long m = qb - qa + 1;
-              if (m < 1) continue;
-              if (B.order() == 1)
-                slice_terms<1, CC>(s, t0, step, scale, m, src, a, Cn);
-              else
-                slice_terms<kMaxBoxSplineOrder, CC>(s, t0, step, scale, m, src, a, Cn);
-            }
+            if (hi < lo) continue;
+            for (long i = 0; i < Q; ++i)
+              aligned_terms<CC>(u.data() + lo, hi - lo + 1,
+                                hk + std::size_t(g.s1 * i + shift + lo) * Cn,
+                                acc + std::size_t(i) * Cn, Cn);
           }
         }
       }
@@ -516,12 +326,8 @@ void HexAcquisition::Band::add(long y0, long y1, const T* rows) {
   if (band_ < 0 || y0 != next_row_ || y1 > whole_.bands_.end(band_) || y1 < y0)
     throw std::logic_error("HexAcquisition::Band::add_rows(): rows out of the band's order");
   if (y1 == y0) return;
-  const bool aligned = whole_.plan_.quadrature() == HexQuadrature::Aligned;
   std::vector<T>& ext = extended<T>();
-  if (aligned)
-    whole_.interpolate(y0, y1, rows, ext, threads_);
-  else
-    whole_.extend(y0, y1, rows, ext, threads_);
+  whole_.interpolate(y0, y1, rows, ext, threads_);
   // The coefficient rows it reaches: added to now where the earlier bands
   // that reach them are done with them (decided at the band's first touch),
   // else kept for end().

@@ -7,8 +7,7 @@ template <typename T>
 Coefficients project_grid(const Grid<T>& input, double W, double H, const HexProjectionOptions& o) {
   const int margin = o.margin >= 0 ? o.margin : hex_default_margin(o.order);
   const HexAcquisitionPlan plan(input.width, input.height, input.channels, W, H,
-                                hex_layout(o.density, W, H, margin), o.order, o.boundary,
-                                o.quadrature);
+                                hex_layout(o.density, W, H, margin), o.order, o.boundary);
   Coefficients k = acquire(input, plan, o.threads);
   hex_prefilter(k, o.threads);
   return k;

@@ -70,9 +70,6 @@ Resolved resolve(const Settings& o) {
   if (!hex && o.lattice != "cartesian")
     throw RequestError("--lattice '" + o.lattice + "': expected cartesian or hex");
   if (!hex && o.density_given) throw RequestError("--density applies to --lattice hex only");
-  if (!hex && o.quadrature_given) throw RequestError("--quadrature applies to --lattice hex only");
-  const HexQuadrature quadrature =
-      as_request("--quadrature: ", [&] { return parse_hex_quadrature(o.quadrature); });
   if (!hex && o.generator.rfind("hex-", 0) == 0)
     throw RequestError("--generator " + o.generator + " needs --lattice hex");
   if (hex) {
@@ -81,7 +78,6 @@ Resolved resolve(const Settings& o) {
       return BoxSpline::parse(o.generator_given ? o.generator : "hex-quartic").order();
     });
     r.space.density = o.density;
-    r.space.quadrature = quadrature;
   } else {
     r.space.generator = as_request("--generator: ", [&] { return Kernel::parse(o.generator); });
   }
@@ -146,9 +142,9 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
     if (r.clamp == Clamp::Local)
       throw RequestError("--clamp local needs the input samples; " + reader.path() +
                          " is a coefficient file");
-    if (o.lattice_given || o.density_given || o.quadrature_given)
+    if (o.lattice_given || o.density_given)
       throw RequestError(reader.path() + " is a coefficient file: its lattice is recorded in it; "
-                         "drop --lattice, --density and --quadrature");
+                         "drop --lattice and --density");
     f.from_coefficient_file = true;
     f.input_half = reader.attribute("sis:input_format") == "half";
     const auto t = Clock::now();

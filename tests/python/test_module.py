@@ -57,8 +57,8 @@ CASES = [
     (["--display", "offsets:0.1,0.2;-0.3,0.1", "--highlight-compress", "--clamp", "local"],
      dict(display="offsets:0.1,0.2;-0.3,0.1", highlight_compress=True, clamp="local")),
     (["--lattice", "hex"], dict(lattice="hex")),
-    (["--lattice", "hex", "--generator", "hex-hat", "--quadrature", "cell", "--density", "1.3"],
-     dict(lattice="hex", generator="hex-hat", quadrature="cell", density=1.3)),
+    (["--lattice", "hex", "--generator", "hex-hat", "--density", "1.3"],
+     dict(lattice="hex", generator="hex-hat", density=1.3)),
 ]
 
 
@@ -285,7 +285,7 @@ def test_help_shows_every_option_with_its_default():
     import inspect
     sig = inspect.signature(siproject.project)
     for name in ["size", "factor", "generator", "method", "display", "boundary", "lattice",
-                 "density", "quadrature", "nonfinite", "prefilter", "clamp",
+                 "density", "nonfinite", "prefilter", "clamp",
                  "highlight_compress", "threads"]:
         assert name in sig.parameters
         assert name in siproject.project.__doc__

@@ -142,7 +142,7 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
                     std::optional<std::string> method, const std::string& display,
                     const std::string& boundary, const std::string& lattice,
                     std::optional<double> density, const std::string& density_spelling,
-                    std::optional<std::string> quadrature, const std::string& nonfinite,
+                    const std::string& nonfinite,
                     const std::string& prefilter, const std::string& clamp,
                     bool highlight_compress, int threads, bool coefficients_only) {
   Settings s;
@@ -157,7 +157,6 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
   s.lattice = lattice;
   s.lattice_given = lattice != "cartesian";
   if (density) s.density = *density, s.density_given = true, s.density_spelling = density_spelling;
-  if (quadrature) s.quadrature = *quadrature, s.quadrature_given = true;
   s.nonfinite = nonfinite;
   s.prefilter = prefilter;
   s.clamp = clamp;

@@ -82,13 +82,12 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs);
 // The space: a lattice with a generator, from a closed set. Cartesian: the
 // tensor space of `generator` on the output pixels. Hexagonal: the
 // box spline of `hex_order` on a hexagonal lattice of `density` points per
-// output pixel, samples taken by `quadrature`.
+// output pixel.
 struct Space {
   SpaceKind kind = SpaceKind::Cartesian;
   Kernel generator = Kernel::bspline(3);
   int hex_order = 2;
   double density = 1.0;
-  HexQuadrature quadrature = HexQuadrature::Aligned;
 };
 
 struct ProjectionRequest {

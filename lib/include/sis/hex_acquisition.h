@@ -1,42 +1,34 @@
 #pragma once
 // Analog acquisition on the hexagonal lattice: the inner products
 // r[n] = <f, phi(. - x_n)> / |det L| for every stored coefficient of a
-// HexLayout (margin included), from point samples of a supersampled image:
-//   r[n] = (dx dy / |det L|) sum_q f_q M_n(L^{-1} (x_q - x_n)),
-// over every sample of the boundary-extended image in the support. Samples as
-// in acquisition.h: input sample (i, j) of a W_in x H_in image covering
-// image_width x image_height output pixels sits at ((i + 1/2) dx, (j + 1/2) dy),
-// dx = image_width / W_in. The weight dx dy / |det L| normalises the Gram to
-// the lattice (a[0] = 1/2 for the hat), as on the Cartesian lattice.
+// HexLayout (margin included), from point samples of a supersampled image.
+// Samples as in acquisition.h: input sample (i, j) of a W_in x H_in image
+// covering image_width x image_height output pixels sits at
+// ((i + 1/2) dx, (j + 1/2) dy), dx = image_width / W_in; the image is
+// extended beyond the frame by the boundary rule. The normalisation by
+// |det L| makes the Gram the lattice's (a[0] = 1/2 for the hat), as on the
+// Cartesian lattice.
 //
-// Quadrature: a square sample grid is incommensurate with the hexagonal
-// lattice, so the plain sum over the samples (HexQuadrature::Point) is not
-// exact for polynomials: its error falls like (dx/h)^2 for the hat and
-// (dx/h)^4 for the quartic (the smoothness of M_n across its knot lines).
-// The sum is exact for f of degree < 2n on a grid aligned with the lattice,
-// spacings h / s1 with s1 even and (sqrt(3)/2) h / s2: there M_n's transform
-// vanishes to order 2n on the whole dual of the grid but 0.
-//
-// HexQuadrature::Aligned (the default) uses that grid: each input row is
-// interpolated along x onto the aligned columns X_m = o.x + m h / s1, then
-// the rows along y onto the aligned rows Y_r = o.y + r (sqrt(3)/2) h / s2,
-// both by 4-point cubic Lagrange interpolation (exact for cubics), and the
-// plain sum runs over the aligned grid, whose weights M_n(X_m - x_n, Y_r - y_n)
-// / (s1 s2) are one fixed table for every lattice point (the points lie on
+// Quadrature (docs/design.md section 10): a square sample grid is
+// incommensurate with the hexagonal lattice, so the plain sum over the
+// samples is not exact for polynomials. The sum is exact for f of degree
+// < 2n on a grid aligned with the lattice, spacings h / s1 with s1 even and
+// (sqrt(3)/2) h / s2: there M_n's transform vanishes to order 2n on the
+// whole dual of the grid but 0. So each input row is interpolated along x
+// onto the aligned columns X_m = o.x + m h / s1, then the rows along y onto
+// the aligned rows Y_r = o.y + r (sqrt(3)/2) h / s2, both by 4-point cubic
+// Lagrange interpolation (exact for cubics), and the plain sum runs over
+// the aligned grid:
+//   r[n] = sum_g M_n(L^{-1} (g - x_n)) f~(g) / (s1 s2),
+// whose weights are one table for every lattice point (the points lie on
 // the grid). s1 is the even integer and s2 the integer nearest the input's
 // samples per step and per row (at least 2 and 1), so the grid is about as
 // dense as the input. Exact for every polynomial of degree < 2n (linear for
 // the hat, cubic for the quartic) at every lattice point whose support and
 // interpolation taps lie inside the input, whatever the factor and the
-// alignment. Each input row still adds terms to the coefficient rows in
-// input row order: the vertical interpolation weights of row e are folded
-// into the table rows it serves.
-//
-// HexQuadrature::Cell instead takes each sample as the value of f over its
-// cell [i dx, (i+1) dx] x [j dy, (j+1) dy] and integrates that piecewise
-// constant image against phi exactly (BoxSplineBand): no ripple on flat
-// areas, at the price of a smooth bias -(dx^2 f_xx + dy^2 f_yy) / 24 where f
-// curves.
+// alignment. Each input row adds terms to the coefficient rows in input row
+// order: its vertical interpolation weights are folded into the table rows
+// it serves.
 //
 // Rows stream through: each input row is read once and added to every
 // coefficient whose support holds it or one of its boundary images.
@@ -53,20 +45,10 @@
 
 namespace sis {
 
-enum class HexQuadrature {
-  Aligned,  // the point rule on the aligned grid the samples are interpolated onto
-  Point,    // r[n] = (dx dy / |det L|) sum_q f_q phi(x_q - x_n), as on the Cartesian lattice
-  Cell,     // r[n] = sum_q f_q int_{cell q} phi(x - x_n) dx / |det L|
-};
-// "aligned" | "point" | "cell"
-HexQuadrature parse_hex_quadrature(const std::string& spelling);
-std::string hex_quadrature_name(HexQuadrature q);
-
 class HexAcquisitionPlan {
  public:
   HexAcquisitionPlan(long input_width, long input_height, int channels, double image_width,
-                     double image_height, const HexLayout& layout, int order, Boundary boundary,
-                     HexQuadrature quadrature = HexQuadrature::Aligned);
+                     double image_height, const HexLayout& layout, int order, Boundary boundary);
 
   long input_width() const { return win_; }
   long input_height() const { return hin_; }
@@ -74,19 +56,17 @@ class HexAcquisitionPlan {
   const HexLayout& layout() const { return layout_; }
   const BoxSpline& generator() const { return *spline_; }
   Boundary boundary() const { return boundary_; }
-  HexQuadrature quadrature() const { return quadrature_; }
   double image_width() const { return image_w_; }
   double image_height() const { return image_h_; }
   double sample_dx() const { return dx_; }
   double sample_dy() const { return dy_; }
-  double quadrature_weight() const { return scale_; }  // dx dy / |det L|
   // First extended column and the source column of each extended column.
   long first_column() const { return q0_; }
   const std::vector<long>& column_source() const { return colmap_; }
   // Extended rows (boundary images) of input row k, increasing.
   const std::vector<long>& row_images(long k) const { return images_[k]; }
 
-  // The aligned grid (HexQuadrature::Aligned; empty otherwise).
+  // The aligned grid.
   struct AlignedGrid {
     int s1 = 0, s2 = 0;  // aligned columns per step, rows per lattice row
     long m0 = 0;         // first aligned column held: X_m0
@@ -111,11 +91,10 @@ class HexAcquisitionPlan {
  private:
   long win_, hin_;
   int channels_;
-  double image_w_, image_h_, dx_, dy_, scale_;
+  double image_w_, image_h_, dx_, dy_;
   HexLayout layout_;
   const BoxSpline* spline_;
   Boundary boundary_;
-  HexQuadrature quadrature_;
   long q0_ = 0;
   std::vector<long> colmap_;
   std::vector<std::vector<long>> images_;
@@ -170,12 +149,12 @@ class HexAcquisition {
     std::vector<char> state_;                // per coefficient row: 0 untouched, 1 adding, 2 deferred
     struct Kept {                            // rows kept for the deferred coefficient rows
       long y0, y1;
-      std::vector<float> ext_f;              // extended along x, as they came (float
+      std::vector<float> ext_f;              // interpolated along x, in the rows' own type (float
       std::vector<double> ext_d;             // or double)
       std::vector<long> rows;                // the deferred coefficient rows they reach
     };
     std::vector<Kept> kept_;
-    // the current strip, extended along x, in the rows' own type
+    // the current strip, interpolated along x, in the rows' own type
     std::vector<float> ext_f_;
     std::vector<double> ext_d_;
     template <typename T>
@@ -210,16 +189,14 @@ class HexAcquisition {
   std::unique_ptr<Band> in_order_;
   template <typename T>
   void add_in_order(long y0, long y1, const T* rows);
-  template <typename T>
-  void extend(long y0, long y1, const T* rows, std::vector<T>& ext, int threads) const;
-  // The aligned rule's strip: rows [y0, y1) interpolated onto the aligned
-  // columns, kept in the samples' own type.
+  // The strip: rows [y0, y1) interpolated onto the aligned columns, kept in
+  // the samples' own type.
   template <typename T>
   void interpolate(long y0, long y1, const T* rows, std::vector<T>& out, int threads) const;
-  std::size_t strip_row_size() const;  // values per strip row as accumulate() takes them
+  std::size_t strip_row_size() const;  // values per interpolated row
   // The coefficient rows rows [y0, y1) reach, in increasing order.
   std::vector<long> reached(long y0, long y1) const;
-  // Adds the terms of the extended rows [y0, y1) to the coefficient rows js.
+  // Adds the terms of the interpolated rows [y0, y1) to the coefficient rows js.
   template <typename S>
   void accumulate(const S* ext, long y0, long y1, const std::vector<long>& js, int threads);
 };

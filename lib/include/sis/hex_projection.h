@@ -15,7 +15,6 @@ struct HexProjectionOptions {
   double density = 1.0;  // lattice points per output pixel
   Boundary boundary = Boundary::Mirror;  // extension of the input beyond the frame
   int margin = -1;       // lattice steps beyond the frame; -1: hex_default_margin(order)
-  HexQuadrature quadrature = HexQuadrature::Aligned;
   int threads = 1;
 };
 

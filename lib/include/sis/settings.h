@@ -26,7 +26,7 @@ struct Settings {
   std::string size;              // "WxH" ("" : none)
   std::string generator = "cubic", method = "min-error", display, boundary = "mirror";
   std::string nonfinite = "error", prefilter = "fft", clamp = "none";
-  std::string lattice = "cartesian", quadrature = "aligned";
+  std::string lattice = "cartesian";
   double density = 1.0;
   std::string density_spelling;  // as given ("" : the number)
   bool highlight_compress = false;
@@ -34,7 +34,7 @@ struct Settings {
   // Which were given (a coefficient file refuses them; a conventional
   // filter named alone means the conventional method).
   bool generator_given = false, method_given = false, boundary_given = false;
-  bool lattice_given = false, density_given = false, quadrature_given = false;
+  bool lattice_given = false, density_given = false;
 };
 
 // The settings in the engine's terms. Throws RequestError with the message

@@ -86,13 +86,13 @@ def _samples(input: Input):
 
 
 def _form(input, size, factor, generator, method, display, boundary, lattice, density,
-          quadrature, nonfinite, prefilter, clamp, highlight_compress, threads, coefficients_only):
+          nonfinite, prefilter, clamp, highlight_compress, threads, coefficients_only):
     result = _core._form(
         _samples(input), _size(size),
         None if factor is None else float(factor), "" if factor is None else str(factor),
         generator, method, display or "", boundary, lattice,
         None if density is None else float(density), "" if density is None else str(density),
-        quadrature, nonfinite, prefilter, clamp, bool(highlight_compress), int(threads),
+        nonfinite, prefilter, clamp, bool(highlight_compress), int(threads),
         coefficients_only)
     for w in result[2]:
         _warnings.warn(w, RuntimeWarning, stacklevel=3)
@@ -103,7 +103,7 @@ def project(input: Input, *, size: Optional[Size] = None, factor: Optional[float
             generator: Optional[str] = None, method: Optional[str] = None,
             display: Optional[str] = None, boundary: str = "mirror",
             lattice: str = "cartesian", density: Optional[float] = None,
-            quadrature: Optional[str] = None, nonfinite: str = "error",
+            nonfinite: str = "error",
             prefilter: str = "fft", clamp: str = "none", highlight_compress: bool = False,
             threads: int = 0) -> np.ndarray:
     """The final image of a render, as siproject forms it.
@@ -123,7 +123,7 @@ def project(input: Input, *, size: Optional[Size] = None, factor: Optional[float
         min-error, centred for conventional.
     boundary: "mirror" or "periodic".
     lattice: "cartesian" or "hex"; density (hex: lattice points per output
-        pixel, None: 1) and quadrature (hex: "aligned", "point" or "cell", None: aligned).
+        pixel, None: 1).
     nonfinite: "error" or "zero" (NaN/Inf samples replaced by 0, with a
         RuntimeWarning).
     prefilter: "fft" or "recursive". clamp: "none", "zero" or "local".
@@ -134,7 +134,7 @@ def project(input: Input, *, size: Optional[Size] = None, factor: Optional[float
     siproject writes to a float EXR, bit for bit.
     """
     image, _, _ = _form(input, size, factor, generator, method, display, boundary, lattice,
-                        density, quadrature, nonfinite, prefilter, clamp, highlight_compress,
+                        density, nonfinite, prefilter, clamp, highlight_compress,
                         threads, False)
     return image
 
@@ -142,7 +142,7 @@ def project(input: Input, *, size: Optional[Size] = None, factor: Optional[float
 def coefficients(input: Input, *, size: Optional[Size] = None, factor: Optional[float] = None,
                  generator: Optional[str] = None, method: Optional[str] = None,
                  boundary: str = "mirror", lattice: str = "cartesian",
-                 density: Optional[float] = None, quadrature: Optional[str] = None,
+                 density: Optional[float] = None,
                  nonfinite: str = "error", prefilter: str = "fft",
                  highlight_compress: bool = False, threads: int = 0) -> "Coefficients":
     """The coefficients of the approximation, with their space.
@@ -153,7 +153,7 @@ def coefficients(input: Input, *, size: Optional[Size] = None, factor: Optional[
     image exactly.
     """
     _, k, _ = _form(input, size, factor, generator, method, None, boundary, lattice, density,
-                    quadrature, nonfinite, prefilter, "none", highlight_compress, threads, True)
+                    nonfinite, prefilter, "none", highlight_compress, threads, True)
     return Coefficients(k)
 
 
