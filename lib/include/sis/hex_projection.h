@@ -25,4 +25,23 @@ Coefficients project_hexagonal(const Image& input, double image_width, double im
 Coefficients project_hexagonal(const Grid<double>& input, double image_width,
                                double image_height, const HexProjectionOptions& options);
 
+// The exact noise gain of the hexagonal method with the centred display on
+// a periodic N x N frame at integer factor s (N a multiple of 8), white
+// noise of variance 1 on the samples: pixel n's variance is
+// ||(R P W)^T e_n||^2 = x_n' G x_n, x_n = P r_n the prefiltered resampling
+// weights of pixel n (P = a^{-1} on the periodic grid, symmetric) and
+// G = W W' the Gram of the acquisition weights over the samples, W's columns
+// from impulse images (impulses 8 pixels apart, beyond the acquisition's
+// reach, each coefficient touched belonging to the impulse nearest to it
+// modulo the frame). gain: s^2 times the mean of x_n' G x_n over the pixels
+// at least `border` from the edges (relative to 1 / s^2, a box average's
+// variance); relative_sd: the relative standard deviation of that mean
+// measured on one noise image, sqrt(2 sum_{n,m} Cov_nm^2) / (count mean),
+// Cov_nm = x_m' G x_n over pairs at most 6 pixels apart (the rest below
+// 1e-3 of the variance). Slow: seconds at N = 32.
+struct HexNoiseGain {
+  double gain = 0, relative_sd = 0;
+};
+HexNoiseGain hex_noise_gain(int order, double density, long N, int s, long border);
+
 }  // namespace sis
