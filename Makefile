@@ -297,7 +297,7 @@ compare: $(if $(PREBUILT),,build)
 # frame and inscribed disk), objects and edges; hex hat and quartic at several
 # densities against the tent and cubic at one coefficient per pixel, factors
 # 2, 4 and 8; the density where they meet. $(OUT)/report/hex/ (QUICK:
-# $(OUT)/report-quick/hex/, 64 x 64, factors 2 and 4, a few seconds).
+# $(OUT)/report-quick/hex/, 64 x 64, factors 2 and 4, about 15 s).
 .PHONY: compare-hex
 compare-hex: $(if $(PREBUILT),,build)
 	@test -x $(PYTHON) || { echo "compare-hex: $(PYTHON) not found: run scripts/setup.sh (make setup)" >&2; exit 1; }

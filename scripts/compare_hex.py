@@ -173,7 +173,9 @@ def measure(images, cfg):
                     t0 = time.perf_counter()
                     k = siproject.coefficients(inputs[s], size=cfg.res, **kw)
                     times.append(time.perf_counter() - t0)
-                coefficients = int(np.prod(k.array.shape[:2]))
+                # lattice points over the frame (the stored hexagonal grid
+                # also covers a margin around it)
+                coefficients = int(round(d * cfg.res * cfg.res))
                 rows.append({"image": name, "factor": s, "generator": g, "lattice": k.lattice,
                              "density": d, "coefficients": coefficients, "l2": error(k),
                              "project_s": min(times)})
@@ -262,11 +264,12 @@ def page(rows, der, cfg, images):
                  f"<td>{d['ratio_at_equal_count']:.3f}</td><td>{fmt(d['break_even_density'], '.3f')}</td>"
                  f"<td>{fmt(None if d['saving'] is None else 100 * d['saving'], '.1f')}"
                  f"{'' if d['saving'] is None else ' %'}</td></tr>")
-    h.append("</table><p>A saving below 0 means the hexagonal lattice needs more coefficients than the "
-             "Cartesian one; '-': the errors do not meet within the densities measured.</p>")
+    h.append("</table><p>The saving is 1 - the density where they meet: the share of coefficients the "
+             "hexagonal lattice spares at equal error (below 0: it needs more); '-': the errors do not meet "
+             "within the densities measured.</p>")
     h.append("<img src='error-vs-density.png' alt='error against density' style='max-width:100%'>")
     h.append("<h2>Every measure</h2><table><tr><th>image</th><th>factor</th><th>generator</th><th>density</th>"
-             "<th>coefficients</th><th>L2 error</th><th>projection (s)</th></tr>")
+             "<th>lattice points over the frame</th><th>L2 error</th><th>projection (s)</th></tr>")
     for r in rows:
         h.append(f"<tr><td>{r['image']}</td><td>{r['factor']:g}</td><td>{r['generator']}</td>"
                  f"<td>{r['density']:g}</td><td>{r['coefficients']}</td><td>{r['l2']:.4g}</td>"
@@ -296,6 +299,10 @@ def main(argv):
     if 1.0 not in cfg.densities:
         raise StudyError("--densities must include 1 (equal coefficient count)")
     images = cfg.images.split()
+    if not images or not cfg.factors or not cfg.densities:
+        raise StudyError("--images, --factors and --densities must each name at least one")
+    if any(s < 1 for s in cfg.factors) or any(not d > 0 for d in cfg.densities):
+        raise StudyError("--factors must be integers >= 1 and --densities numbers > 0")
     for name in images:
         if name not in ("smooth", "zoneplate", "zoneplate-disk") and not os.path.exists(os.path.join(ROOT, "scenes", name + ".pov")):
             raise StudyError(f"--images: no closed form and no scenes/{name}.pov for '{name}'")
@@ -337,6 +344,8 @@ if __name__ == "__main__":
     try:
         main(sys.argv[1:])
     except StudyError as e:
+        sys.exit(f"compare_hex: {e}")
+    except (ValueError, OSError, RuntimeError) as e:  # from the module: its message names the cause
         sys.exit(f"compare_hex: {e}")
     except KeyboardInterrupt:
         sys.exit(130)

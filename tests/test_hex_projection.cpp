@@ -433,7 +433,8 @@ TEST(HexNoise, MeasuredGainIsTheDiscreteOperatorsExactGain) {
     EXPECT_NEAR(measured, exact.gain, 4 * sd)
         << "order " << n << ": measured " << measured << ", exact " << exact.gain << ", sd " << sd;
   }
-  EXPECT_THROW(hex_noise_gain(2, 1.0, 30, 4, 4), std::invalid_argument);
+  EXPECT_THROW(hex_noise_gain(2, 0.0, 32, 4, 4), std::invalid_argument);
+  EXPECT_THROW(hex_noise_gain(2, 0.05, 16, 4, 4), std::invalid_argument);  // reach beyond the frame
 }
 
 TEST(HexResample, DisplayModesMatchDirectEvaluation) {

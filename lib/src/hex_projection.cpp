@@ -32,12 +32,23 @@ Coefficients project_hexagonal(const Grid<double>& input, double W, double H,
 }
 
 HexNoiseGain hex_noise_gain(int order, double density, long N, int s, long border) {
-  if (N < 16 || N % 8 != 0 || s < 1 || border < 0 || 2 * border >= N)
+  if (N < 16 || s < 1 || border < 0 || 2 * border >= N || !(density > 0) || !std::isfinite(density))
     throw std::invalid_argument("hex_noise_gain(): frame " + std::to_string(N) + ", factor " +
-                                std::to_string(s) + " or border " + std::to_string(border) +
-                                " out of range (N a multiple of 8, at least 16)");
-  const long D = 8L * s, per = N * s / D;
+                                std::to_string(s) + ", border " + std::to_string(border) +
+                                " or density " + std::to_string(density) + " out of range");
   const HexLayout L = hex_layout(density, double(N), double(N), hex_default_margin(order));
+  // An impulse's acquisition reaches the support's radius, the Lagrange taps
+  // and one aligned step: impulses P pixels apart, P the smallest divisor of
+  // N above twice that, so that each coefficient touched is nearest to its
+  // own impulse.
+  const double reach = order * L.step() + 2.0 / s + L.step() / 2;
+  long Ppx = 0;
+  for (long d = 1; d <= N && !Ppx; ++d)
+    if (N % d == 0 && d > 2 * reach) Ppx = d;
+  if (!Ppx)
+    throw std::invalid_argument("hex_noise_gain(): frame " + std::to_string(N) +
+                                " is too small for the acquisition's reach");
+  const long D = Ppx * s, per = N * s / D;
   const HexAcquisitionPlan plan(N * s, N * s, 1, double(N), double(N), L, order, Boundary::Periodic);
   const long Q = L.columns, R = L.rows, count = Q * R;
   // G = sum_q w_q w_q', w_q the acquisition of an impulse at sample q

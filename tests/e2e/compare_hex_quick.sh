@@ -7,9 +7,10 @@
 # with a finite error and time, that on the smooth images (the analytic one
 # and the zone plate, whose errors fall like a power of the lattice spacing)
 # each hex generator's error falls as the density grows (not asserted on the
-# scenes: their edges alias differently at each density), that each derived
-# meeting density lies between the densities measured, and that a bad image
-# name fails with a message and no report.
+# scenes: their edges alias differently at each density), that on the zone
+# plate's inscribed disk the hex quartic meets the bicubic's error below
+# density 1 from factor 4, and that a bad image name fails with a message
+# and no report.
 set -euo pipefail
 [ $# -eq 1 ] || { echo "usage: ${0##*/} SOURCE_DIR" >&2; exit 64; }
 src=$1
@@ -37,10 +38,13 @@ for image, factor, g in itertools.product(("smooth", "zoneplate", "zoneplate-dis
                  if x["image"] == image and x["factor"] == factor and x["generator"] == g)
     assert len(pts) == len(r["densities"])
     assert all(b[1] < a[1] for a, b in zip(pts, pts[1:])), f"{image} f{factor} {g}: {pts}"
-lo, hi = min(r["densities"]), max(r["densities"])
-for x in r["derived"]:
-    if x["break_even_density"] is not None:
-        assert lo <= x["break_even_density"] <= hi, x
+# On the zone plate's inscribed disk (isotropic content) the hex quartic
+# beats the bicubic at equal count from factor 4, so the two meet below
+# density 1 (quick run: 0.81 at equal count, meeting near 0.92).
+disk = [x for x in r["derived"] if x["image"] == "zoneplate-disk" and x["hex"] == "hex-quartic"
+        and x["factor"] >= 4]
+assert disk and all(x["ratio_at_equal_count"] < 1 and x["break_even_density"] is not None
+                    and x["break_even_density"] < 1 for x in disk), disk
 print(f"ok: {len(names)} files named, {len(rows)} rows, smooth images' errors fall with density")
 PY
 if "$src/.venv/bin/python" "$src/scripts/compare_hex.py" --work "$tmp/w" --report "$tmp/bad" \

@@ -225,6 +225,9 @@ def test_reference_keeps_its_acquisitions(files):
     assert ref.l2_error(hex_k) == siproject.l2_error(hex_k, truth, border=2)
     with pytest.raises(ValueError, match="border 3 given with a Reference made with border 2"):
         siproject.l2_error(k, ref, border=3)
+    with pytest.raises(ValueError, match="border 0 given with a Reference made with border 2"):
+        siproject.l2_error(k, ref, border=0)
+    assert siproject.l2_error(k, ref, border=2) == ref.l2_error(k)
     with pytest.raises(ValueError, match="border -1"):
         siproject.Reference(truth, border=-1)
     with pytest.raises(ValueError, match="channels"):

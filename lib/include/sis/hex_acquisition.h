@@ -26,9 +26,10 @@
 // dense as the input. Exact for every polynomial of degree < 2n (linear for
 // the hat, cubic for the quartic) at every lattice point whose support and
 // interpolation taps lie inside the input, whatever the factor and the
-// alignment. Each input row adds terms to the coefficient rows in input row
-// order: its vertical interpolation weights are folded into the table rows
-// it serves.
+// alignment (to rounding: rows interpolated from float samples are kept in
+// float, a rounding of 6e-8). Each input row adds terms to the coefficient
+// rows in input row order: its vertical interpolation weights are folded
+// into the table rows it serves.
 //
 // Rows stream through: each input row is read once and added to every
 // coefficient whose support holds it or one of its boundary images.

@@ -26,12 +26,12 @@ Coefficients project_hexagonal(const Grid<double>& input, double image_width,
                                double image_height, const HexProjectionOptions& options);
 
 // The exact noise gain of the hexagonal method with the centred display on
-// a periodic N x N frame at integer factor s (N a multiple of 8), white
+// a periodic N x N frame at integer factor s, white
 // noise of variance 1 on the samples: pixel n's variance is
 // ||(R P W)^T e_n||^2 = x_n' G x_n, x_n = P r_n the prefiltered resampling
 // weights of pixel n (P = a^{-1} on the periodic grid, symmetric) and
 // G = W W' the Gram of the acquisition weights over the samples, W's columns
-// from impulse images (impulses 8 pixels apart, beyond the acquisition's
+// from impulse images (impulses further apart than twice the acquisition's
 // reach, each coefficient touched belonging to the impulse nearest to it
 // modulo the frame). gain: s^2 times the mean of x_n' G x_n over the pixels
 // at least `border` from the edges (relative to 1 / s^2, a box average's

@@ -47,7 +47,9 @@ double psnr(const ImageView& a, const ImageView& b, double peak = 1.0, long bord
 // without evaluating f_app (docs/design.md section 8): sum f_app^2 = c' G c
 // with G the Gram matrix of the generator's samples (one per axis), sum
 // f_app f = c' a with a the reference acquired by the same samples, and
-// sum f^2; in the hexagonal space f_app is evaluated at every sample
+// sum f^2 (a difference of sums of size N f^2: errors below about 1e-8 of
+// the RMS of f are not resolved); in the hexagonal space f_app is evaluated
+// at every sample
 // (resample() with the centred display; the values pass through float, a
 // relative rounding of about 6e-8).
 double l2_error(const Coefficients& coefficients, const ImageView& reference,

@@ -271,23 +271,23 @@ class Reference:
 
 def l2_error(k: Coefficients, truth: Optional[Union[np.ndarray, Reference]] = None, *,
              zoneplate: Optional[float] = None, samples_per_pixel: int = 8,
-             border: float = 0.0) -> float:
+             border: Optional[float] = None) -> float:
     """Continuous L2 error of k's approximation against a truth: a render of
     the same frame at a much higher factor (an array, or a Reference made
     from one, whose border then applies), or the closed-form zone plate of
     scenes/zoneplate.pov with ZP_K = zoneplate (sampled at
     samples_per_pixel^2 points per output pixel). border: output pixels left
-    out along each edge."""
+    out along each edge (None: 0, or the Reference's)."""
     if (truth is None) == (zoneplate is None):
         raise ValueError("l2_error(): give exactly one truth: an array or zoneplate=K")
     if isinstance(truth, Reference):
-        if float(border) not in (0.0, truth.border):
+        if border is not None and float(border) != truth.border:
             raise ValueError(f"l2_error(): border {border:g} given with a Reference made with "
                              f"border {truth.border:g}")
         return truth.l2_error(k)
     return _core._l2_error(k._k, None if truth is None else _samples(truth),
                            None if zoneplate is None else float(zoneplate),
-                           int(samples_per_pixel), float(border))
+                           int(samples_per_pixel), 0.0 if border is None else float(border))
 
 
 def overshoot(output: np.ndarray, input: np.ndarray, *, neighbourhood: float = 1.0,
