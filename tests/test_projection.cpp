@@ -74,9 +74,10 @@ double direct_acquisition(const Image& in, const Kernel& k, Method m, Boundary b
 
 }  // namespace
 
-TEST(Acquisition, MatchesDirectSumAtAnyRatio) {
-  // Output 9 x 7 from 23 x 19 samples: non-integer ratios on both axes.
-  const long W = 9, H = 7, win = 23, hin = 19;
+TEST(Acquisition, MatchesDirectSumAtWholeRatios) {
+  // Output 9 x 7 from 27 x 35 samples: 3 and 5 samples per pixel, where the
+  // plain sum is the acquisition (at other ratios, test_factor.cpp).
+  const long W = 9, H = 7, win = 27, hin = 35;
   const Image in = random_image(win, hin, 2, 42);
   const Kernel kernels[] = {Kernel::bspline(0), Kernel::bspline(1), Kernel::bspline(3),
                             Kernel::bspline(6), Kernel::mitchell(),  Kernel::lanczos(3),
@@ -190,14 +191,14 @@ std::vector<std::vector<double>> direct_axis(long count, long samples, const Ker
 
 TEST(Acquisition, UpsampledAxesProjectTheCubicInterpolant) {
   // Where the samples are sparser than the lattice (here both axes, then x
-  // downsampled and y upsampled), the acquisition is the exact inner product
-  // of the samples' cubic interpolant with each generator, against the slow
-  // route of direct_axis(). Tolerance: the midpoint rule's error on
+  // downsampled by a whole factor and y upsampled), the acquisition is the
+  // exact inner product of the samples' cubic interpolant with each
+  // generator, against the slow route of direct_axis(). Tolerance: the midpoint rule's error on
   // piecewise polynomials with kinks, about (2R / 20000)^2 of the values'
   // scale, and the model's truncation (2^-64 of its peak). The coefficient
   // grid starts unset; a freed grid of its size filled with non-zeros goes
   // first, so that unset memory would show.
-  for (auto [W, H, win, hin] : {std::array<long, 4>{19, 15, 4, 3}, {9, 13, 40, 5}})
+  for (auto [W, H, win, hin] : {std::array<long, 4>{19, 15, 4, 3}, {9, 13, 36, 5}})
     for (Boundary rule : kRules)
       for (const Kernel& k : {Kernel::bspline(0), Kernel::bspline(1), Kernel::bspline(3),
                               Kernel::bspline(4), Kernel::mitchell()}) {
@@ -291,8 +292,9 @@ TEST(Acquisition, BandsMatchTheDirectSumAndGiveTheSameBitsInAnyOrder) {
   // Bands of 1, 3 and 16 rows: coefficient rows whose input rows lie in
   // up to a dozen bands (periodic: bands at both ends). In order (any strip
   // and thread count), and band by band on two threads at once in
-  // decreasing order: the same bits; against the direct sum: rounding.
-  const long W = 9, H = 7, win = 23, hin = 41;
+  // decreasing order: the same bits; against the direct sum (3 and 6
+  // samples per pixel): rounding.
+  const long W = 9, H = 7, win = 27, hin = 42;
   const Image in = random_image(win, hin, 3, 17);
   for (const Kernel& k : {Kernel::bspline(3), Kernel::mitchell()})
     for (Boundary b : kRules)

@@ -104,18 +104,101 @@ AxisWeights model_axis(int axis, long coefficients, long samples, double extent,
   return make_axis_weights(coefficients, samples, boundary, range, weight);
 }
 
+// An axis whose samples are denser than the lattice but not a whole number
+// of them per lattice step (h / step not an integer), where the point sum is
+// not a quadrature of the inner product (a coefficient's support holds
+// different counts of samples from cell to cell). The samples are modelled
+// by their 4-point cubic Lagrange interpolant under the boundary rule,
+// f(x) = sum_j f_j L(u - j), u = x / step - 1/2, L the piecewise cubic
+// cardinal function of support [-2, 2] (lagrange4), and the model is
+// integrated exactly against the generator: the weight of sample j is
+// (step / h) int L(u - j) phi(((u + 1/2) step - p_n) / h) du, by 6-point
+// Gauss-Legendre on the pieces between the model's knots (the integers u)
+// and the generator's (exact: degree <= 3 + 7 on each piece; the kernels
+// that are not piecewise polynomials in pieces of at most half a lattice
+// step), over the extended indices, folded by the rule. The model
+// reproduces polynomials of degree 3: a flat image stays flat, a ramp a
+// ramp. A coefficient's entries are those of its support plus 2 samples
+// either side.
+AxisWeights lagrange_axis(int axis, long coefficients, long samples, double extent,
+                          const Lattice& lattice, const Kernel& kernel, Boundary boundary) {
+  const double step = extent / samples;
+  const double h = lattice.axis_step(axis);
+  const double R = kernel.radius();
+  const double scale = step / h;  // du in lattice units
+  std::vector<double> gx, gw;
+  gauss_legendre01(6, gx, gw);
+  const std::vector<double> knots = kernel_knots(kernel);
+  const bool polynomial = !knots.empty();
+  long cached = -1, j0 = 0;
+  std::vector<double> g, cut;
+  auto build = [&](long n) {
+    const double pn = lattice.axis_position(axis, n);
+    auto u_of = [&](double t) { return (pn + t * h) / step - 0.5; };
+    const double ulo = u_of(-R), uhi = u_of(R);
+    j0 = long(std::floor(ulo)) - 1;
+    const long j1 = long(std::floor(uhi)) + 2;
+    g.assign(std::size_t(j1 - j0 + 1), 0.0);
+    cut.clear();
+    cut.push_back(ulo);
+    cut.push_back(uhi);
+    for (long m = long(std::floor(ulo)) + 1; m <= long(std::floor(uhi)); ++m) cut.push_back(double(m));
+    for (double t : knots) cut.push_back(u_of(t));
+    std::sort(cut.begin(), cut.end());
+    for (std::size_t q = 0; q + 1 < cut.size(); ++q) {
+      const double a = std::max(ulo, cut[q]), b = std::min(uhi, cut[q + 1]);
+      if (!(b > a)) continue;
+      const long m = long(std::floor(0.5 * (a + b)));  // the piece's model interval [m, m + 1]
+      const int parts = polynomial ? 1 : std::max(1, int(std::ceil((b - a) * scale / 0.5)));
+      const double len = (b - a) / parts;
+      double* w = g.data() + (m - 1 - j0);
+      for (int part = 0; part < parts; ++part)
+        for (std::size_t i = 0; i < gx.size(); ++i) {
+          const double u = a + (part + gx[i]) * len;
+          const double v = scale * gw[i] * len * kernel.eval(((u + 0.5) * step - pn) / h);
+          const auto L = lagrange4(u - double(m));
+          for (int k = 0; k < 4; ++k) w[k] += v * L[k];
+        }
+    }
+    cached = n;
+  };
+  auto range = [&](long n) {
+    build(n);
+    return std::pair<long, long>(j0, j0 + long(g.size()) - 1);
+  };
+  auto weight = [&](long n, long j) {
+    if (n != cached) build(n);
+    return g[std::size_t(j - j0)];
+  };
+  return make_axis_weights(coefficients, samples, boundary, range, weight);
+}
+
+// Whether the point sum over the samples is the exact inner product (for
+// the polynomials the generator reproduces, docs/design.md section 10): the
+// samples at least as dense as the lattice, a whole number of them per
+// lattice step (h / step within 1e-9 of an integer: the ratio of integer
+// sizes, computed in double).
+bool point_sum_exact(double step, double h) {
+  const double q = h / step, k = std::round(q);
+  return k >= 1 && std::abs(q - k) <= 1e-9 * q;
+}
+
 // Weights from the samples (i + 1/2) * step, i in [0, samples), to the
 // coefficients n along one axis of a separable lattice: the point sum where
-// the samples are at least as dense as the lattice, the projected model of
-// model_axis() where they are sparser.
+// it is exact (point_sum_exact), the projected Lagrange model of
+// lagrange_axis() where the samples are denser but not a whole number per
+// step, the projected spline model of model_axis() where they are sparser.
+// Conventional methods: the same weights, normalised to sum 1.
 AxisWeights acquisition_axis(int axis, long coefficients, long samples, double extent,
                              const Lattice& lattice, const Kernel& kernel, Boundary boundary,
                              Method method) {
   const double step = extent / samples;  // sample spacing, output pixels
   const double h = lattice.axis_step(axis);
   const double support = kernel.radius() * h;
-  if (step > h) {
-    AxisWeights w = model_axis(axis, coefficients, samples, extent, lattice, kernel, boundary);
+  if (step > h || !point_sum_exact(step, h)) {
+    AxisWeights w = step > h
+                        ? model_axis(axis, coefficients, samples, extent, lattice, kernel, boundary)
+                        : lagrange_axis(axis, coefficients, samples, extent, lattice, kernel, boundary);
     if (method == Method::Conventional)
       for (long n = 0; n < coefficients; ++n) {
         const double s = w.sum(n);

@@ -11,20 +11,6 @@
 
 namespace sis {
 
-namespace {
-// 4-point Lagrange interpolation at fraction f in [0, 1) between taps 0 and
-// 1 of the taps -1, 0, 1, 2: reproduces every cubic.
-std::array<double, 4> lagrange4(double f) {
-  return {-f * (f - 1) * (f - 2) / 6, (f + 1) * (f - 1) * (f - 2) / 2,
-          -(f + 1) * f * (f - 2) / 2, (f + 1) * f * (f - 1) / 6};
-}
-// The first tap and the fraction of position p (in sample indices).
-std::pair<long, double> lagrange_base(double p) {
-  const double b = std::floor(p);
-  return {static_cast<long>(b) - 1, p - b};
-}
-}  // namespace
-
 void HexAcquisitionPlan::AlignedGrid::rows_of(long e, double dy, double oy, double row_step,
                                               std::vector<std::pair<long, double>>& out) const {
   out.clear();

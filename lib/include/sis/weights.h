@@ -2,6 +2,8 @@
 // Per-axis weight tables: the plan shared by acquisition and resampling.
 // For each target index, the source indices (already folded into [0, sources)
 // by the boundary rule, sorted, duplicates merged) and their weights.
+#include <array>
+#include <cmath>
 #include <functional>
 #include <utility>
 #include <vector>
@@ -50,6 +52,21 @@ void add_scaled_rows(double* const* sums, const double* w, int count, long offse
 template <typename T>
 void add_scaled_row_group(double* const* sums, const double* const* w, int count, int starts,
                           long offset, const T* const* x, int rows, long n);
+
+// 4-point cubic Lagrange interpolation at fraction f in [0, 1) between taps
+// 0 and 1 of the taps -1, 0, 1, 2: reproduces every cubic. As a function of
+// the distance to one sample it is the piecewise cubic cardinal function of
+// support 4 samples (the model of the samples where the point sum is not an
+// inner product: acquisition.cpp, hex_acquisition.cpp).
+inline std::array<double, 4> lagrange4(double f) {
+  return {-f * (f - 1) * (f - 2) / 6, (f + 1) * (f - 1) * (f - 2) / 2,
+          -(f + 1) * f * (f - 2) / 2, (f + 1) * f * (f - 1) / 6};
+}
+// The first tap and the fraction of position p (in sample indices).
+inline std::pair<long, double> lagrange_base(double p) {
+  const double b = std::floor(p);
+  return {static_cast<long>(b) - 1, p - b};
+}
 
 // Builds a table: for target t, the extended source indices k in
 // range(t) = [first, last] get weight(t, k); k is folded by the boundary rule.
