@@ -6,10 +6,15 @@
 //
 // Input sample (i, j) of a W_in x H_in image covering image_width x
 // image_height output pixels sits at ((i + 1/2) dx, (j + 1/2) dy) with
-// dx = image_width / W_in: any real ratio per axis. The quadrature is the
-// plain sum, r[n] = dx dy sum_i f_i phi(x_i - x_n), over every sample of the
-// boundary-extended image in the support. Rows stream through: each row is
-// read once and added to every coefficient whose support holds it.
+// dx = image_width / W_in: any real ratio per axis. Per axis, the weights
+// (docs/design.md section 10): where the lattice step holds a whole number
+// of samples, the plain sum, r[n] = dx dy sum_i f_i phi(x_i - x_n), over
+// every sample of the boundary-extended image in the support; where it
+// holds more samples but not a whole number, the exact inner product of
+// the samples' 4-point cubic Lagrange interpolant with phi; where it holds
+// fewer (upsampling), that of their cubic spline interpolant. Rows stream
+// through: each row is read once and added to every coefficient whose
+// support holds it.
 #include <functional>
 #include <memory>
 #include <vector>
