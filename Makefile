@@ -207,7 +207,7 @@ $(OUT)/$(1)/summary.txt $(OUT)/$(1)/summary.csv &: $(foreach m,$(METHODS),$(OUT)
 
 # The page of the scene's images side by side, two enlarged crops each, and the summary.
 $(OUT)/$(1)/index.html: $(foreach m,$(METHODS),$(OUT)/$(1)/$(m).png) $(OUT)/$(1)/summary.txt scripts/scene_page.py
-	@$$(PYTHON) scripts/scene_page.py $(OUT)/$(1) $(METHODS)
+	@$$(PYTHON) scripts/scene_page.py $(OUT)/$(1) $(foreach m,$(METHODS),'$(m)=$(METHOD_OPTS_$(m))')
 endef
 
 # $(call method_rules,SCENE,METHOD): METHOD.exr (float, for the measures), .png (8-bit sRGB) and
