@@ -174,7 +174,7 @@ band_indices := $(shell seq 0 $$(( $(TILES) - 1 )))
 band_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)-band$(2)of$(TILES).exr
 band_y0 = $(shell echo $$(( ( $(1) ) * $(RENDER_H) / $(TILES) )))
 inputs_of = $(if $(filter 1,$(TILES)),$(call render_of,$(1)),$(foreach i,$(band_indices),$(call band_of,$(1),$(i))))
-method_cmd_of = $(strip $(SIPROJECT) $(call inputs_of,$(1)) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(SIFLAGS))
+method_cmd_of = $(strip $(SIPROJECT) $(call inputs_of,$(1)) $(if $(filter 1,$(TILES)),,--bands) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(SIFLAGS))
 summary_of = $(OUT)/$(1)/summary.txt
 
 # $(call band_rules,SCENE,I,Y0,Y1): band I, render rows [Y0, Y1): POV-Ray
@@ -207,7 +207,7 @@ $(OUT)/$(1)/summary.txt $(OUT)/$(1)/summary.csv &: $(foreach m,$(METHODS),$(OUT)
 
 # The page of the scene's images side by side, two enlarged crops each, and the summary.
 $(OUT)/$(1)/index.html: $(foreach m,$(METHODS),$(OUT)/$(1)/$(m).png) $(OUT)/$(1)/summary.txt scripts/scene_page.py
-	@$$(PYTHON) scripts/scene_page.py $(OUT)/$(1) $(METHODS)
+	@$$(PYTHON) scripts/scene_page.py $(OUT)/$(1) $(foreach m,$(METHODS),'$(m)=$(METHOD_OPTS_$(m))')
 endef
 
 # $(call method_rules,SCENE,METHOD): METHOD.exr (float, for the measures), .png (8-bit sRGB) and

@@ -1,13 +1,17 @@
 #!/usr/bin/env python3
-"""scene_page.py DIR METHOD...: DIR/index.html, the scene's images side by side.
+"""scene_page.py DIR METHOD[=OPTIONS]...: DIR/index.html, the scene's images side by side.
 
 Each METHOD's 8-bit image (DIR/METHOD.png, made by make) at its own size,
 and two crops of 64 x 64 pixels enlarged 4x by pixel replication
-(DIR/crops/METHOD-1.png, -2.png): the windows where the methods disagree
-most (the standard deviation across them of each pixel's luminance, summed
-over the window; the second at least two windows from the first). Below,
+(DIR/crops/METHOD-1.png, -2.png), shown at that enlargement (256 x 256 CSS
+pixels, never smoothed) and opened full size on a click: the windows where
+the methods disagree most (the standard deviation across them of each
+pixel's luminance, summed over the window; the second at least two windows
+from the first). OPTIONS, siproject's options of the method (make passes
+them), spell the method out where the reader meets its short name. Below,
 DIR/summary.txt, the time and high-pass share of each method. The page
-marks on its body how many of its images loaded (data-loaded="N of M"), so
+marks on its body how many of its images loaded (data-loaded="N of M") and
+how many crops are shown at their enlargement (data-crops="N of M"), so
 that a headless browser can check them. Files are written to temporary
 names and renamed.
 """
@@ -19,6 +23,31 @@ import numpy as np
 from PIL import Image
 
 CROP, ZOOM = 64, 4
+
+# How the page spells out siproject's names.
+METHOD_WORDS = {"min-error": "min-error (orthogonal projection onto the space)",
+                "conventional": "conventional (normalised weighted average)"}
+GENERATOR_WORDS = {"box": "box", "tent": "tent (linear B-spline)", "quadratic": "quadratic B-spline",
+                   "cubic": "cubic B-spline", "mitchell": "Mitchell-Netravali (B = C = 1/3)",
+                   "gaussian": "Gaussian", "catmull-rom": "Catmull-Rom", "lanczos3": "Lanczos 3",
+                   "hex-hat": "hexagonal hat box spline", "hex-quartic": "hexagonal quartic box spline"}
+DISPLAY_WORDS = {"centred": "sampled at pixel centres", "2x2": "sampled at 2 x 2 points (+-1/4) per pixel",
+                 "pixel": "averaged over each pixel"}
+
+
+def spelled_out(options):
+    """The method siproject's options name, in words ("" when none given)."""
+    words = options.split()
+    if not words:
+        return ""
+    given = {words[i]: words[i + 1] for i in range(len(words) - 1) if words[i].startswith("--")}
+    generator = given.get("--generator", given.get("--filter", "cubic"))
+    bspline = generator in ("box", "tent", "quadratic", "cubic") or generator.startswith(("bspline:", "hex-"))
+    method = given.get("--method", "min-error" if bspline else "conventional")
+    display = given.get("--display", "2x2" if method == "min-error" else "centred")
+    lattice = " on the hexagonal lattice" if given.get("--lattice") in ("hex", "hexagonal") else ""
+    return (f"{METHOD_WORDS.get(method, method)}, {GENERATOR_WORDS.get(generator, generator)}{lattice}, "
+            f"{DISPLAY_WORDS.get(display, display)}")
 
 
 def windows(score, size, count=2):
@@ -54,7 +83,12 @@ def save(img, path):
 def main():
     if len(sys.argv) < 3:
         sys.exit(__doc__)
-    folder, methods = sys.argv[1], sys.argv[2:]
+    folder = sys.argv[1]
+    methods, described = [], {}
+    for arg in sys.argv[2:]:
+        name, _, options = arg.partition("=")
+        methods.append(name)
+        described[name] = spelled_out(options)
     images = {}
     for m in methods:
         path = os.path.join(folder, m + ".png")
@@ -73,22 +107,33 @@ def main():
     summary = open(summary_path).read() if os.path.isfile(summary_path) else "(no summary.txt)"
     scene = os.path.basename(os.path.normpath(folder))
     where = ", ".join(f"({x}, {y})" for y, x in corners)
+    shown = size * ZOOM  # CSS pixels: the crop at its enlargement
     cards = []
     for m in methods:
-        crops = "".join(f'<img class="crop" src="crops/{html.escape(m)}-{i}.png" alt="{html.escape(m)} crop {i}">'
+        e = html.escape(m)
+        crops = "".join(f'<a href="crops/{e}-{i}.png"><img class="crop" src="crops/{e}-{i}.png" '
+                        f'width="{shown}" height="{shown}" alt="{e} crop {i}, {ZOOM}x"></a>'
                         for i in range(1, len(corners) + 1))
-        cards.append(f'<figure><figcaption>{html.escape(m)}</figcaption>'
-                     f'<a href="{html.escape(m)}.png"><img class="full" src="{html.escape(m)}.png" alt="{html.escape(m)}"></a>'
-                     f'<div>{crops}</div></figure>')
+        words = f'<p class="words">{html.escape(described[m])}</p>' if described[m] else ""
+        cards.append(f'<figure><figcaption><b>{e}</b>{words}</figcaption>'
+                     f'<a href="{e}.png"><img class="full" src="{e}.png" alt="{e}"></a>'
+                     f'<div class="crops">{crops}</div></figure>')
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(scene)}: every method</title>
-<style>body{{font-family:sans-serif;margin:1em}}.grid{{display:flex;flex-wrap:wrap;gap:12px}}
-figure{{margin:0;width:260px}}img.full{{width:256px;height:auto;image-rendering:auto}}
-img.crop{{width:126px;image-rendering:pixelated;margin:1px}}figcaption{{font-weight:bold}}pre{{background:#f4f4f4;padding:8px}}</style>
-</head><body data-loaded="pending">
+<style>body{{font-family:sans-serif;margin:1em}}.grid{{display:flex;flex-wrap:wrap;gap:16px}}
+figure{{margin:0}}img.full{{width:256px;height:auto;image-rendering:auto}}
+.crops{{display:flex;gap:4px}}.crops a{{line-height:0}}
+img.crop{{width:{shown}px;height:{shown}px;image-rendering:pixelated;image-rendering:crisp-edges}}
+figcaption{{max-width:{2 * shown + 4}px}}p.words{{margin:0.2em 0 0.4em;font-size:90%;color:#333}}
+pre{{background:#f4f4f4;padding:8px}}</style>
+</head><body data-loaded="pending" data-crops="pending">
 <h1>{html.escape(scene)}: the final image by every method</h1>
-<p>Each image as formed (8-bit sRGB; click for full size) and two {size} x {size} crops enlarged {ZOOM}x where
-the methods differ most (top-left corners {html.escape(where)}). Made by <code>make</code>
-(scripts/scene_page.py); the float results are the <code>.exr</code> files beside this page.</p>
+<p>Each image as formed (8-bit sRGB; click for full size) and two {size} x {size} crops enlarged {ZOOM}x
+(each pixel a {ZOOM} x {ZOOM} block; click for the crop alone) where the methods differ most (top-left
+corners {html.escape(where)}). The short names: <b>me-</b> min-error, the orthogonal projection onto
+the space of the generator; <b>conv-</b> or a filter's name alone, conventional, the normalised weighted
+average of the samples under the filter; <b>-2x2</b> the approximation sampled at four points per pixel,
+else at pixel centres. Made by <code>make</code> (scripts/scene_page.py); the float results are the
+<code>.exr</code> files beside this page.</p>
 <div class="grid">{''.join(cards)}</div>
 <h2>Summary</h2><pre>{html.escape(summary)}</pre>
 <script>
@@ -96,6 +141,13 @@ window.addEventListener("load", function () {{
   var imgs = document.images, ok = 0;
   for (var i = 0; i < imgs.length; i++) if (imgs[i].complete && imgs[i].naturalWidth > 0) ok++;
   document.body.setAttribute("data-loaded", ok + " of " + imgs.length);
+  var crops = document.querySelectorAll("img.crop"), right = 0;
+  for (var j = 0; j < crops.length; j++) {{
+    var c = crops[j], r = c.getBoundingClientRect();
+    if (r.width == {shown} && r.height == {shown} && c.naturalWidth == {shown} &&
+        getComputedStyle(c).imageRendering != "auto") right++;
+  }}
+  document.body.setAttribute("data-crops", right + " of " + crops.length);
 }});
 </script></body></html>
 """

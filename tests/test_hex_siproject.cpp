@@ -149,13 +149,13 @@ TEST_F(HexSiproject, BandsHalfNonFiniteRemediesAndThreads) {
   const Image ref = read_image(path("ref.exr"));
   for (int t : {1, 2, 3}) {
     for (const std::string& in :
-         std::vector<std::string>{path("whole.exr"), path("c.exr") + " " + path("a.exr") + " " + path("b.exr")}) {
+         std::vector<std::string>{path("whole.exr"), "--bands " + path("c.exr") + " " + path("a.exr") + " " + path("b.exr")}) {
       ASSERT_EQ(run(in + " -o " + path("out.exr") + opts + " --threads " + std::to_string(t)).status, 0);
       EXPECT_EQ(read_image(path("out.exr")).data, ref.data) << t << " threads: " << in;
     }
   }
   for (float v : ref.data) ASSERT_TRUE(std::isfinite(v));
-  const Result r = run(path("a.exr") + " " + path("b.exr") + " " + path("c.exr") + " -o " +
+  const Result r = run("--bands " + path("a.exr") + " " + path("b.exr") + " " + path("c.exr") + " -o " +
                        path("e.exr") + " --factor 3 --lattice hex");
   EXPECT_EQ(r.status, 3) << r.output;
   EXPECT_NE(r.output.find("b.exr: non-finite sample (NaN or Inf) at x 40, y 50, channel G"),

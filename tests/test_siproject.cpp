@@ -342,7 +342,7 @@ TEST_F(Siproject, BadInputGetsAClearErrorAndLosesNothing) {
       {in + out + " --factor 2 --generator sinc", 2, "unknown generator 'sinc'"},
       {in + out + " --factor 2 --generator mitchell --method min-error", 2, "needs a B-spline generator"},
       {in + out + " --size 10by10", 2, "--size '10by10'"},
-      {in + out + " --size 0x10", 2, "--size '0x10'"},
+      {in + out + " --size 0x0", 2, "--size '0x0'"},
       {in + out + " --factor 2 --display 3x3", 2, "unknown display '3x3'"},
       {in + out + " --factor 2 --display offsets:0.1", 2, "offset '0.1'"},
       {in + " -o " + path("nowhere/out.exr") + " --factor 2", 4, "does not exist"},
@@ -425,21 +425,21 @@ TEST_F(Siproject, RowBandsProjectAsOneImage) {
   for (const std::string opts : {"--factor 4", "--size 30x17 --generator tent --display pixel"}) {
     ASSERT_EQ(run(path("whole.exr") + " -o " + path("a.exr") + " -q " + opts).status, 0);
     // any order on the command line
-    const Result r = run(path("b2.exr") + " " + path("b0.exr") + " " + path("b1.exr") + " -o " +
-                         path("b.exr") + " -q " + opts);
+    const Result r = run("--bands " + path("b2.exr") + " " + path("b0.exr") + " " + path("b1.exr") +
+                         " -o " + path("b.exr") + " -q " + opts);
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_EQ(read_image(path("a.exr")).data, read_image(path("b.exr")).data) << opts;
   }
   // a gap, an overlap, a missing last band: errors naming the file, no output
   write_band(path("over.exr"), in, 40, 80);
   const auto before = files();
-  Result r = run(path("b0.exr") + " " + path("b2.exr") + " -o " + path("c.exr") + " --factor 4");
+  Result r = run("--bands " + path("b0.exr") + " " + path("b2.exr") + " -o " + path("c.exr") + " --factor 4");
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.output.find("b2.exr: not a row band"), std::string::npos) << r.output;
-  r = run(path("b0.exr") + " " + path("b1.exr") + " " + path("over.exr") + " -o " + path("c.exr") + " --factor 4");
+  r = run("--bands " + path("b0.exr") + " " + path("b1.exr") + " " + path("over.exr") + " -o " + path("c.exr") + " --factor 4");
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.output.find("gap or overlap"), std::string::npos) << r.output;
-  r = run(path("b0.exr") + " " + path("b1.exr") + " -o " + path("c.exr") + " --factor 4");
+  r = run("--bands " + path("b0.exr") + " " + path("b1.exr") + " -o " + path("c.exr") + " --factor 4");
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.output.find("the bands end at row 50"), std::string::npos) << r.output;
   EXPECT_EQ(files(), before);

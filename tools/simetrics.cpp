@@ -316,6 +316,9 @@ int main(int argc, char** argv) {
   } catch (const InputError& e) {
     std::cerr << "simetrics: " << e.what() << "\n";
     return kExitInput;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "simetrics: out of memory (the images, or --samples-per-pixel's points)\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "simetrics: " << e.what() << "\n";
     return 1;

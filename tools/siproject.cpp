@@ -14,6 +14,7 @@
 #include <iostream>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -23,6 +24,7 @@
 #include "sis/hex_lattice.h"
 #include "sis/memory.h"
 #include "sis/projection.h"
+#include "sis/sequence.h"
 #include "sis/settings.h"
 #include "sis/space.h"
 
@@ -47,6 +49,12 @@ struct Options {
   std::string output, coeffs;
   std::string data_format;  // "": the input's
   bool verbose = false, quiet = false;
+  // A batch: the inputs' frame range (--frames), the digits of '#' and '@'
+  // (--framepadding, 0: theirs), and whether several inputs are row bands
+  // of one image (--bands) rather than frames.
+  std::string frames;
+  int framepadding = 0;
+  bool bands = false;
 };
 
 using Clock = std::chrono::steady_clock;
@@ -128,8 +136,8 @@ int run(const Options& o) {
       throw UsageError("--coeffs " + path + ": coefficient files are float EXR");
   }
 
-  // Several inputs are row bands of one image: each band's data window
-  // spans the full width and the bands tile the display window's rows.
+  // Several inputs (--bands) are row bands of one image: each band's data
+  // window spans the full width and the bands tile the display window's rows.
   std::vector<ProjectionInput> inputs;
   for (const std::string& in : o.inputs) inputs.push_back(ProjectionInput::file(in));
   InputSet set = inspect(inputs);
@@ -261,6 +269,181 @@ int run(const Options& o) {
   return 0;
 }
 
+
+// One projection of a batch: its inputs (one image, or the row bands of
+// one), its outputs.
+struct Job {
+  std::vector<std::string> inputs;
+  std::string output, coeffs;
+};
+
+// What -o or --coeffs names: a file, a folder (each frame keeps its input's
+// file name) or a pattern with a frame wildcard (each frame's number).
+struct Target {
+  enum Kind { File, Folder, Pattern } kind = File;
+  std::string path;
+  std::optional<FramePattern> pattern;
+};
+
+Target target_of(const std::string& path, const std::string& option, int framepadding) {
+  Target t;
+  t.path = path;
+  if (path.empty()) return t;
+  std::error_code ec;
+  if (path.back() == '/' || fs::is_directory(path, ec)) {
+    if (!fs::is_directory(path, ec)) throw OutputError(option + " " + path + ": no such folder");
+    t.kind = Target::Folder;
+    return t;
+  }
+  if (fs::exists(fs::symlink_status(path, ec))) return t;  // a file of that name, whatever it holds
+  try {
+    t.pattern = parse_frame_pattern(path, framepadding);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(option + ": " + e.what());
+  }
+  if (t.pattern) t.kind = Target::Pattern;
+  return t;
+}
+
+// An input frame: its file, and its number where a pattern gave it.
+struct Frame {
+  std::string path;
+  std::optional<long> number;
+  std::string pattern;  // the pattern it came from ("": none)
+};
+
+// The inputs as frames: patterns expanded (their range, --frames, or the
+// files on disk), every frame checked to exist before anything runs.
+std::vector<Frame> expand_inputs(const Options& o) {
+  std::vector<Frame> frames;
+  bool any_pattern = false;
+  std::vector<long> given;
+  if (!o.frames.empty()) {
+    try {
+      given = parse_frame_range(o.frames);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--frames: ") + e.what());
+    }
+  }
+  for (const std::string& in : o.inputs) {
+    std::error_code ec;
+    std::optional<FramePattern> p;
+    if (!fs::exists(fs::symlink_status(in, ec))) {
+      try {
+        p = parse_frame_pattern(in, o.framepadding);
+      } catch (const std::invalid_argument& e) {
+        throw UsageError(e.what());
+      }
+    }
+    if (!p) {
+      frames.push_back({in, std::nullopt, ""});
+      continue;
+    }
+    any_pattern = true;
+    std::vector<long> numbers;
+    if (!p->range.empty()) {
+      if (!o.frames.empty())
+        throw UsageError(in + ": a frame range in the name and --frames " + o.frames + ": give one");
+      numbers = parse_frame_range(p->range);
+    } else if (!o.frames.empty()) {
+      numbers = given;
+    } else {
+      numbers = frames_on_disk(*p);
+      if (numbers.empty()) throw InputError(in + ": no file matches the frame pattern");
+    }
+    for (long n : numbers) {
+      const std::string name = p->name(n);
+      std::error_code e2;
+      if (!fs::exists(name, e2))
+        throw InputError(name + ": no such file (frame " + std::to_string(n) + " of " + in + ")");
+      frames.push_back({name, n, in});
+    }
+  }
+  if (!o.frames.empty() && !any_pattern)
+    throw UsageError("--frames " + o.frames + ": no input has a frame wildcard (#, @, %0Nd)");
+  return frames;
+}
+
+// Where frame f goes under target t (a folder or a pattern).
+std::string destination(const Target& t, const Frame& f, const std::string& option,
+                        const std::vector<Frame>& all) {
+  if (t.kind == Target::Folder) return (fs::path(t.path) / fs::path(f.path).filename()).string();
+  if (!f.number)
+    throw UsageError(option + " " + t.path + ": a pattern numbers frames from numbered inputs "
+                     "(e.g. frame.#.exr or frame.1-10#.exr); " + f.path + " has no number "
+                     "(" + option + " FOLDER/ keeps each input's name)");
+  if (!t.pattern->range.empty()) {
+    std::vector<long> numbers;
+    for (const Frame& g : all) numbers.push_back(g.number.value_or(-1));
+    if (parse_frame_range(t.pattern->range) != numbers)
+      throw UsageError(option + " " + t.path + ": its frame range is not the inputs' frames");
+  }
+  return t.pattern->name(*f.number);
+}
+
+// The projections the command line asks for: one image, the row bands of
+// one (--bands), or a batch of frames each projected alone.
+std::vector<Job> plan_jobs(const Options& o) {
+  const std::vector<Frame> frames = expand_inputs(o);
+  const Target out = target_of(o.output, "-o", o.framepadding);
+  const Target coeffs = target_of(o.coeffs, "--coeffs", o.framepadding);
+  if (o.bands) {
+    if (out.kind != Target::File || coeffs.kind != Target::File)
+      throw UsageError("--bands makes one image of its inputs: -o and --coeffs name files");
+    Job j{{}, o.output, o.coeffs};
+    for (const Frame& f : frames) j.inputs.push_back(f.path);
+    return {j};
+  }
+  if (frames.size() == 1 && out.kind == Target::File && coeffs.kind == Target::File)
+    return {Job{{frames[0].path}, o.output, o.coeffs}};
+  if (frames.size() > 1 && out.kind == Target::File)
+    throw UsageError(std::to_string(frames.size()) + " input frames and one output file " + o.output +
+                     ": give -o a folder (each frame keeps its input's name) or a pattern "
+                     "(out.#.exr); row bands of one image: --bands");
+  if (frames.size() > 1 && coeffs.kind == Target::File && !o.coeffs.empty())
+    throw UsageError(std::to_string(frames.size()) + " input frames and one coefficient file " +
+                     o.coeffs + ": give --coeffs a folder or a pattern");
+  std::vector<Job> jobs;
+  std::set<std::string> written, read;
+  for (const Frame& f : frames) {
+    std::error_code ec;
+    read.insert(fs::weakly_canonical(fs::absolute(f.path, ec), ec).string());
+  }
+  for (const Frame& f : frames) {
+    Job j{{f.path}, out.kind == Target::File ? o.output : destination(out, f, "-o", frames), ""};
+    if (!o.coeffs.empty())
+      j.coeffs = coeffs.kind == Target::File ? o.coeffs : destination(coeffs, f, "--coeffs", frames);
+    for (const std::string& w : {j.output, j.coeffs}) {
+      if (w.empty()) continue;
+      std::error_code ec;
+      const std::string c = fs::weakly_canonical(fs::absolute(w, ec), ec).string();
+      if (read.count(c)) throw UsageError(w + " would be written over an input frame");
+      if (!written.insert(c).second)
+        throw UsageError(w + " would be written twice (frames of one name)");
+    }
+    jobs.push_back(std::move(j));
+  }
+  return jobs;
+}
+
+// Runs the jobs one after another, each on every thread (the engine's
+// bands), stopping at the first that fails (the frames before it are
+// written whole; the failing one leaves nothing).
+int run_jobs(const Options& o) {
+  const std::vector<Job> jobs = plan_jobs(o);
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    Options one = o;
+    one.inputs = jobs[i].inputs;
+    one.output = jobs[i].output;
+    one.coeffs = jobs[i].coeffs;
+    if (o.verbose && jobs.size() > 1)
+      std::fprintf(stderr, "siproject: frame %zu of %zu: %s -> %s\n", i + 1, jobs.size(),
+                   one.inputs.front().c_str(), one.output.c_str());
+    if (const int status = run(one)) return status;
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -281,21 +464,43 @@ int main(int argc, char** argv) {
       "Exit status: 0 success, 1 out of memory, 2 usage, 3 input, 4 output.",
       "siproject"};
   app.add_option("IN", o.inputs,
-                 "input image, or a coefficient file written by --coeffs; several inputs are row "
-                 "bands of one image (by their data windows, e.g. partial renders cropped with "
-                 "oiiotool --crop), projected as one")->required();
-  app.add_option("-o,--output", o.output, "output image (.exr half or float, see -d; .png, .jpg, .tif... 8-bit sRGB)")->required();
+                 "input image, or a coefficient file written by --coeffs; several inputs, or a "
+                 "frame pattern as oiiotool spells it (frame.#.exr: 4 digits per #, frame.@@.exr: "
+                 "1 per @, frame.%04d.exr; a range before the wildcard, frame.1-10#.exr, or "
+                 "--frames), are frames projected one after another; with --bands they are row "
+                 "bands of one image")->required();
+  app.add_option("-o,--output", o.output,
+                 "output image (.exr half or float, see -d; .png, .jpg, .tif... 8-bit sRGB); for "
+                 "frames a folder (each keeps its input's file name) or a pattern (out.#.png)")
+      ->required();
+  app.add_option("--frames", o.frames,
+                 "frames of the input patterns without a range in their name, as oiiotool: "
+                 "1-10, 10-1, 1-10x2 (every 2nd), 1-10y2 (the others), 3,4,10-20x2 [default: the "
+                 "files on disk that match]");
+  app.add_option("--framepadding", o.framepadding,
+                 "digits of the frame numbers of # and @ patterns [default: 4 per #, 1 per @]")
+      ->check(CLI::Range(1, 18));
+  app.add_flag("--bands", o.bands,
+               "the inputs are row bands of one image, projected as one (placed by their data "
+               "windows, e.g. partial renders cropped with oiiotool --crop)");
   double factor = 0;
   auto* fac = app.add_option("--factor", factor,
                              "supersampling factor per axis: output = input / S (any real S > 0; "
                              "S < 1 upsamples: the input's cubic interpolant is projected)");
-  app.add_option("--size", o.settings.size, "output size WxH (any ratio to the input)");
-  auto* g = app.add_option("--generator", o.settings.generator,
-                           "box, tent, quadratic, cubic, bspline:N (N = 0..7), mitchell, gaussian, "
+  app.add_option("--size,--resize", o.settings.size,
+                 "output size as oiiotool's --resize: WxH, W or Wx0 (the height keeps the "
+                 "input's aspect), 0xH, P% or P%xQ% (percentages of the input's sides); any "
+                 "ratio to the input");
+  double scale = 0;
+  auto* sca = app.add_option("--scale", scale,
+                             "scale per axis: output = input x M (0.5 = --size 50% = --factor 2)");
+  auto* g = app.add_option("--generator,--filter", o.settings.generator,
+                           "box, tent (or triangle), quadratic, cubic, bspline:N (N = 0..7), mitchell, gaussian, "
                            "catmull-rom, lanczos3; with --lattice hex: hex-hat or hex-quartic "
                            "(the default there)")->capture_default_str();
   auto* lat = app.add_option("--lattice", o.settings.lattice,
-                             "cartesian (coefficients on the output pixels) or hex (a hexagonal "
+                             "cartesian (coefficients on the output pixels) or hex, also "
+                             "hexagonal (a hexagonal "
                              "lattice, min-error, resampled to the output pixels)")
                   ->capture_default_str();
   auto* dens = app.add_option("--density", o.settings.density,
@@ -306,7 +511,8 @@ int main(int argc, char** argv) {
                            "min-error (orthogonal projection, B-spline generators) or conventional "
                            "(normalised weighted average, any generator)")->capture_default_str();
   app.add_option("--display", o.settings.display,
-                 "how the continuous approximation is sampled: centred, 2x2 (off-centre "
+                 "how the continuous approximation is sampled: centred (or centered, "
+                 "centre, center), 2x2 (off-centre "
                  "antialiasing at +-1/4), pixel (exact pixel average) or offsets:DX,DY;DX,DY;... "
                  "[default: 2x2 for min-error, centred (the filtered pixels) for conventional]");
   auto* b = app.add_option("--boundary", o.settings.boundary,
@@ -343,9 +549,13 @@ int main(int argc, char** argv) {
     st.factor = factor;
     st.factor_spelling = fac->as<std::string>();
   }
+  if (sca->count() > 0) {
+    st.scale = scale;
+    st.scale_spelling = sca->as<std::string>();
+  }
   if (st.density_given) st.density_spelling = dens->as<std::string>();
   try {
-    return run(o);
+    return run_jobs(o);
   } catch (const UsageError& e) {
     std::cerr << "siproject: " << e.what() << "\n";
     return kExitUsage;

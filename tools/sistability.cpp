@@ -12,6 +12,8 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <iostream>
+#include <new>
 #include <random>
 #include <string>
 #include <vector>
@@ -111,19 +113,8 @@ std::string num(double v) {
   return b;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  long N = 192;
-  int s = 4;
-  unsigned seed = 2026;
-  CLI::App app{"sistability: noise gain, step response and numerics of every method, as JSON",
-               "sistability"};
-  app.add_option("--size", N, "output size of the noise image (N x N)")->capture_default_str()->check(CLI::Range(16, 4096));
-  app.add_option("--factor", s, "supersampling factor of the noise image")->capture_default_str()->check(CLI::Range(1, 16));
-  app.add_option("--seed", seed, "noise seed")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
-
+// The study at N x N output pixels, factor s, printed as JSON.
+int run(long N, int s, unsigned seed) {
   // Noise: a flat 0.5 image plus N(0, sigma^2) on every sample.
   const double sigma = 0.1;
   std::mt19937 rng(seed);
@@ -239,4 +230,28 @@ int main(int argc, char** argv) {
   out += "]}\n";
   std::fputs(out.c_str(), stdout);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  long N = 192;
+  int s = 4;
+  unsigned seed = 2026;
+  CLI::App app{"sistability: noise gain, step response and numerics of every method, as JSON",
+               "sistability"};
+  app.add_option("--size", N, "output size of the noise image (N x N)")->capture_default_str()->check(CLI::Range(16, 4096));
+  app.add_option("--factor", s, "supersampling factor of the noise image")->capture_default_str()->check(CLI::Range(1, 16));
+  app.add_option("--seed", seed, "noise seed")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  try {
+    return run(N, s, seed);
+  } catch (const std::bad_alloc&) {
+    std::cerr << "sistability: out of memory (--size " << N << " --factor " << s << ": a noise image of "
+              << N * s << " x " << N * s << " samples and its projections; try a smaller --size or --factor)\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "sistability: " << e.what() << "\n";
+    return 1;
+  }
 }

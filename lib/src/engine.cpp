@@ -354,7 +354,7 @@ NonFiniteReport acquire_in_bands(const InputSet& in, const Reading& g, const Ban
     if (progress) progress(double(rows_done) / bands.rows());
   };
   if constexpr (std::is_same_v<Whole, HexAcquisition>)
-    cb.stopped = [&](long) { whole.abandon(); };  // bands waiting on it give up
+    cb.stopped = [&](long b) { whole.abandon(b); };  // later bands waiting on it give up
   return read_grid(g, bands, cb, bad);
 }
 

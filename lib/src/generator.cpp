@@ -179,7 +179,7 @@ Kernel Kernel::lanczos(int lobes) {
 
 Kernel Kernel::parse(const std::string& s) {
   if (s == "box") return bspline(0);
-  if (s == "tent" || s == "linear") return bspline(1);
+  if (s == "tent" || s == "linear" || s == "triangle") return bspline(1);  // triangle: oiiotool's name
   if (s == "quadratic") return bspline(2);
   if (s == "cubic") return bspline(3);
   if (s.rfind("bspline:", 0) == 0) {

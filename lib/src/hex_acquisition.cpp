@@ -284,9 +284,9 @@ void HexAcquisition::add_in_order(long y0, long y1, const T* rows) {
   next_row_ = y1;
 }
 
-void HexAcquisition::abandon() {
+void HexAcquisition::abandon(long band) {
   std::lock_guard<std::mutex> lock(m_);
-  abandoned_ = true;
+  abandoned_ = std::min(abandoned_, band);
   cv_.notify_all();
 }
 
@@ -364,7 +364,8 @@ void HexAcquisition::Band::end() {
     const int position = int(std::find(rb.begin(), rb.end(), band_) - rb.begin());
     {
       std::unique_lock<std::mutex> lock(whole_.m_);
-      whole_.cv_.wait(lock, [&] { return whole_.done_[j] == position || whole_.abandoned_; });
+      // it waits on earlier bands only: one of them abandoned, it gives up
+      whole_.cv_.wait(lock, [&] { return whole_.done_[j] == position || whole_.abandoned_ < band_; });
       if (whole_.done_[j] != position)
         throw std::runtime_error("HexAcquisition::Band::end(): an earlier band was abandoned");
     }

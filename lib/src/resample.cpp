@@ -13,7 +13,7 @@
 namespace sis {
 
 Display Display::parse(const std::string& s) {
-  if (s == "centred" || s == "centered") return centred();
+  if (s == "centred" || s == "centered" || s == "centre" || s == "center") return centred();
   if (s == "2x2") return antialiased_2x2();
   if (s == "pixel") return pixel();
   const std::string prefix = "offsets:";

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
 #include <thread>
 
@@ -24,19 +25,6 @@ std::string spelling(const std::string& given, double value) {
   return s.str();
 }
 
-// "WxH" with positive integers.
-std::pair<long, long> parse_size(const std::string& s) {
-  long w = 0, h = 0;
-  char x = 0, extra = 0;
-  std::istringstream in(s);
-  if (!(in >> w >> x >> h) || (x != 'x' && x != 'X') || (in >> extra) || w < 1 || h < 1)
-    throw RequestError("--size '" + s + "': expected WxH with positive whole numbers, e.g. 1000x750");
-  if (w > kMaxOutputSide || h > kMaxOutputSide)
-    throw RequestError("--size '" + s + "': more than " + std::to_string(kMaxOutputSide) +
-                       " pixels per side");
-  return {w, h};
-}
-
 // Runs f, its std::invalid_argument a RequestError prefixed by `option`.
 template <typename F>
 auto as_request(const std::string& option, F&& f) {
@@ -48,6 +36,43 @@ auto as_request(const std::string& option, F&& f) {
 }
 
 }  // namespace
+
+SizeSpec parse_size(const std::string& s) {
+  const auto bad = [&] {
+    return RequestError("--size '" + s +
+                        "': expected WxH in pixels (0 for a side keeps the input's aspect), W alone, "
+                        "or a percentage P% or P%xQ%, e.g. 1000x750, 960, 0x540, 50%");
+  };
+  // One side: a whole number of pixels, or a positive percentage.
+  const auto side = [&](const std::string& t, long& pixels, double& scale) {
+    if (t.empty()) throw bad();
+    if (t.back() == '%') {
+      const std::string n = t.substr(0, t.size() - 1);
+      if (n.empty() || n.find_first_not_of("0123456789.") != std::string::npos) throw bad();
+      char* end = nullptr;
+      const double p = std::strtod(n.c_str(), &end);
+      if (*end || !std::isfinite(p) || !(p > 0)) throw bad();
+      scale = p / 100;
+      return;
+    }
+    if (t.find_first_not_of("0123456789") != std::string::npos || t.size() > 12) throw bad();
+    pixels = std::stol(t);
+    if (pixels > kMaxOutputSide)
+      throw RequestError("--size '" + s + "': more than " + std::to_string(kMaxOutputSide) +
+                         " pixels per side");
+  };
+  SizeSpec z;
+  const std::size_t x = s.find_first_of("xX");
+  if (x == std::string::npos) {
+    side(s, z.width, z.width_scale);
+    if (z.width_scale) z.height_scale = z.width_scale;  // P%: both sides
+  } else {
+    side(s.substr(0, x), z.width, z.width_scale);
+    side(s.substr(x + 1), z.height, z.height_scale);
+  }
+  if (!z.given()) throw bad();  // 0, 0x0
+  return z;
+}
 
 Resolved resolve(const Settings& o) {
   Resolved r;
@@ -63,12 +88,16 @@ Resolved resolve(const Settings& o) {
   if (!(std::isfinite(o.density) && o.density > 0))
     throw RequestError("--density " + spelling(o.density_spelling, o.density) +
                        ": expected a finite number above 0");
-  if (o.factor && !o.size.empty()) throw RequestError("give --factor or --size, not both");
+  if (o.scale && !(std::isfinite(*o.scale) && *o.scale > 0))
+    throw RequestError("--scale " + spelling(o.scale_spelling, *o.scale) +
+                       ": expected a finite number above 0");
+  if (int(bool(o.factor)) + int(!o.size.empty()) + int(bool(o.scale)) > 1)
+    throw RequestError("give one of --factor, --size and --scale, not several");
   if (!o.size.empty()) r.size = parse_size(o.size);
-  const bool hex = o.lattice == "hex";
+  const bool hex = o.lattice == "hex" || o.lattice == "hexagonal";
   r.hexagonal = hex;
   if (!hex && o.lattice != "cartesian")
-    throw RequestError("--lattice '" + o.lattice + "': expected cartesian or hex");
+    throw RequestError("--lattice '" + o.lattice + "': expected cartesian or hex (hexagonal)");
   if (!hex && o.density_given) throw RequestError("--density applies to --lattice hex only");
   if (!hex && o.generator.rfind("hex-", 0) == 0)
     throw RequestError("--generator " + o.generator + " needs --lattice hex");
@@ -109,19 +138,38 @@ Resolved resolve(const Settings& o) {
 }
 
 std::pair<long, long> output_size(const Settings& o, const Resolved& r, long w, long h) {
-  if (r.size.first) return r.size;
-  if (!o.factor) return {w, h};
-  const double dw = std::round(w / *o.factor), dh = std::round(h / *o.factor);
+  if (!r.size.given() && !o.scale && !o.factor) return {w, h};
+  std::string option;  // for messages
+  double dw = 0, dh = 0;
+  if (r.size.given()) {
+    const SizeSpec& z = r.size;
+    option = "--size " + o.size;
+    dw = z.width ? double(z.width) : w * z.width_scale;
+    dh = z.height ? double(z.height) : h * z.height_scale;
+    if (!dw) dw = dh * w / h;  // the input's aspect
+    if (!dh) dh = dw * h / w;
+  } else if (o.scale) {
+    option = "--scale " + spelling(o.scale_spelling, *o.scale);
+    dw = w * *o.scale, dh = h * *o.scale;
+  } else {
+    option = "--factor " + spelling(o.factor_spelling, *o.factor);
+    dw = w / *o.factor, dh = h / *o.factor;
+  }
+  dw = std::round(dw), dh = std::round(dh);
   if (!(dw <= kMaxOutputSide && dh <= kMaxOutputSide)) {
     std::ostringstream m;
-    m << "--factor " << spelling(o.factor_spelling, *o.factor) << ": the output would be " << dw
-      << " x " << dh << " pixels, more than " << kMaxOutputSide << " per side";
+    m << option << ": the output would be " << dw << " x " << dh << " pixels, more than "
+      << kMaxOutputSide << " per side";
     throw RequestError(m.str());
   }
   const long ow = long(dw), oh = long(dh);
   if (ow < 1 || oh < 1) {
     std::ostringstream m;
-    m << "--factor " << *o.factor << " is larger than the image (" << w << " x " << h << ")";
+    if (o.factor && !r.size.given())
+      m << "--factor " << *o.factor << " is larger than the image (" << w << " x " << h << ")";
+    else
+      m << option << ": the output of the " << w << " x " << h << " image would be " << dw << " x "
+        << dh << " pixels";
     throw RequestError(m.str());
   }
   return {ow, oh};
@@ -167,8 +215,9 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
                                         std::to_string(set.channels) + " output");
     f.inputs = std::move(set);
   } else {
-    if (!o.factor && !r.size.first)
-      throw RequestError("give the output size: --factor S (output = input / S) or --size WxH");
+    if (!o.factor && !o.scale && !r.size.given())
+      throw RequestError("give the output size: --factor S (output = input / S), --size WxH "
+                         "(or W, 0xH, P%) or --scale M (output = input x M)");
     std::tie(f.width, f.height) = output_size(o, r, set.width, set.height);
     f.input_half = set.half;
     ProjectionRequest rq;

@@ -5,8 +5,10 @@
 # cmake --install puts siproject and simetrics in PREFIX/bin (--version
 # names the version and the git revision), the library, its headers and a
 # CMake package under PREFIX, and the Python module in PREFIX's
-# site-packages; a ten-line program outside the project finds the package,
-# builds against it and runs (the ramp's middle is 0.5); the module imports
+# site-packages; the example program of docs/api.md (its CMakeLists.txt and
+# consumer.cpp taken from the page's marked code blocks, so that the page
+# cannot drift) finds the package, builds against it and runs (the ramp's
+# middle is 0.5); the module imports
 # from the prefix and projects; the installed siproject projects a file.
 set -euo pipefail
 [ $# -eq 3 ] || { echo "usage: ${0##*/} SOURCE_DIR BUILD_DIR PYTHON" >&2; exit 64; }
@@ -27,8 +29,18 @@ version=$("$prefix/bin/siproject" --version)
 [[ $("$prefix/bin/simetrics" --version) == simetrics* ]] || fail "simetrics --version"
 echo "$version"
 
-# a consumer program, built outside the project against the installed package
-cmake -S "$src/tests/e2e/consumer" -B "$tmp/consumer" -DCMAKE_PREFIX_PATH="$prefix" > "$tmp/consumer.log" 2>&1 &&
+# docs/api.md's example, built outside the project against the installed package:
+# each block after a "<!-- consumer: FILE -->" line is FILE
+mkdir "$tmp/consumer-src"
+awk -v dir="$tmp/consumer-src" '
+  /^<!-- consumer: [^ ]+ -->$/ { file = dir "/" $3; next }
+  file != "" && /^```/ { if (inside) { inside = 0; file = "" } else inside = 1; next }
+  inside { print > file }
+' "$src/docs/api.md"
+for f in CMakeLists.txt consumer.cpp; do
+  [ -s "$tmp/consumer-src/$f" ] || fail "docs/api.md has no consumer block for $f"
+done
+cmake -S "$tmp/consumer-src" -B "$tmp/consumer" -DCMAKE_PREFIX_PATH="$prefix" > "$tmp/consumer.log" 2>&1 &&
   cmake --build "$tmp/consumer" >> "$tmp/consumer.log" 2>&1 || { cat "$tmp/consumer.log" >&2; fail "the consumer does not build"; }
 middle=$("$tmp/consumer/consumer")
 [ "$middle" = "0.500000" ] || fail "the consumer printed $middle, not 0.500000"

@@ -69,11 +69,19 @@ grep -q '^method ' "$tmp/run1.log" || fail "first run printed no summary table"
 # Chromium; the page marks how many loaded once the load event has fired).
 page=$out/checker/index.html
 if [ -f "$page" ]; then
-  loaded=$(timeout 120 chromium --headless --no-sandbox --disable-gpu --virtual-time-budget=5000 \
-             --dump-dom "file://$page" 2>/dev/null | grep -o 'data-loaded="[^"]*"' || true)
+  dom=$(timeout 120 chromium --headless --no-sandbox --disable-gpu --virtual-time-budget=5000 \
+             --dump-dom "file://$page" 2>/dev/null || true)
+  loaded=$(grep -o 'data-loaded="[^"]*"' <<<"$dom" || true)
   want=$(grep -o '<img ' "$page" | wc -l)  # each image and its crops (one at 64 x 64)
   [ "$want" -ge $(( ${#methods[@]} * 2 )) ] || fail "$page names $want images, fewer than an image and a crop per method"
   [ "$loaded" = "data-loaded=\"$want of $want\"" ] || fail "$page: images loaded: ${loaded:-none reported} (expected $want of $want)"
+  # the crops at their stated enlargement (4 x 64 CSS pixels, pixelated), each a link to itself
+  crops=$(grep -o '<img class="crop"' "$page" | wc -l)
+  [ "$crops" -eq ${#methods[@]} ] || fail "$page: $crops crops, expected one per method"
+  shown=$(grep -o 'data-crops="[^"]*"' <<<"$dom" || true)
+  [ "$shown" = "data-crops=\"$crops of $crops\"" ] || fail "$page: crops at their enlargement: ${shown:-none reported} (expected $crops of $crops)"
+  [ "$(grep -o '<a href="crops/[^"]*"><img class="crop"' "$page" | wc -l)" -eq "$crops" ] || fail "$page: a crop without its link"
+  grep -q 'min-error (orthogonal projection onto the space), cubic B-spline' "$page" || fail "$page does not spell out me-cubic"
 else
   fail "no $page"
 fi

@@ -141,7 +141,7 @@ def siproject_message(*options, input_path):
     (["--factor", "4", "--method", "min-error", "--generator", "mitchell"],
      dict(factor=4, method="min-error", generator="mitchell")),
     (["--factor", "0"], dict(factor=0)),
-    (["--size", "0x4"], dict(size="0x4")),
+    (["--size", "0x0"], dict(size="0x0")),
     (["--factor", "4", "--size", "3x3"], dict(factor=4, size=(3, 3))),
     (["--factor", "4", "--display", "sideways"], dict(factor=4, display="sideways")),
     (["--factor", "4", "--density", "2"], dict(factor=4, density=2)),

@@ -45,8 +45,10 @@ class Kernel {
   static Kernel gaussian(double sigma = 0.5, double radius = 1.5);
   static Kernel lanczos(int lobes = 3);  // sinc(x) sinc(x / lobes), |x| < lobes
 
-  // Parses box, tent, quadratic, cubic, bspline:N, mitchell, catmull-rom,
-  // gaussian, lanczos3. Throws std::invalid_argument naming the spelling.
+  // Parses box, tent (also linear, and triangle as oiiotool names it),
+  // quadratic, cubic, bspline:N, mitchell, catmull-rom, gaussian, lanczos3;
+  // name() gives the first spelling. Throws std::invalid_argument naming
+  // the spelling.
   static Kernel parse(const std::string& spelling);
 
   KernelKind kind() const { return kind_; }

@@ -34,6 +34,7 @@
 // Rows stream through: each input row is read once and added to every
 // coefficient whose support holds it or one of its boundary images.
 #include <array>
+#include <climits>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -166,9 +167,10 @@ class HexAcquisition {
         return ext_d_;
     }
   };
-  // A band that will not end (its reading failed): bands waiting on it give
-  // up with an exception instead of waiting.
-  void abandon();
+  // A band that will not end (its reading failed or stopped): the later
+  // bands waiting on it give up with an exception instead of waiting; the
+  // earlier ones, which never wait on it, go on to their end.
+  void abandon(long band);
 
   // The acquired r[n] (sis/hex_lattice.h says how Coefficients records them).
   Coefficients finish();
@@ -186,7 +188,7 @@ class HexAcquisition {
   std::vector<char> ended_;
   std::mutex m_;
   std::condition_variable cv_;
-  bool abandoned_ = false;
+  long abandoned_ = LONG_MAX;  // the first band abandoned (LONG_MAX: none)
   std::unique_ptr<Band> in_order_;
   template <typename T>
   void add_in_order(long y0, long y1, const T* rows);

@@ -32,7 +32,8 @@ struct Display {
     return {Mode::Points, {{-0.25, -0.25}, {0.25, -0.25}, {-0.25, 0.25}, {0.25, 0.25}}};
   }
   static Display pixel() { return {Mode::PixelAverage, {}}; }
-  // "centred", "2x2", "pixel" or "offsets:DX,DY;DX,DY;..." (each offset
+  // "centred" (also centered, centre, center), "2x2", "pixel" or
+  // "offsets:DX,DY;DX,DY;..." (each offset
   // within kMaxDisplayOffset of the centre, at most kMaxDisplayOffsets of
   // them); throws std::invalid_argument naming the spelling.
   static Display parse(const std::string& spelling);

@@ -23,7 +23,9 @@ inline constexpr int kMaxThreads = 1024;
 struct Settings {
   std::optional<double> factor;  // output = input / factor
   std::string factor_spelling;   // as given, for messages ("" : the number)
-  std::string size;              // "WxH" ("" : none)
+  std::string size;              // as oiiotool's --resize spells it (parse_size; "" : none)
+  std::optional<double> scale;   // output = input x scale
+  std::string scale_spelling;    // as given ("" : the number)
   std::string generator = "cubic", method = "min-error", display, boundary = "mirror";
   std::string nonfinite = "error", prefilter = "fft", clamp = "none";
   std::string lattice = "cartesian";
@@ -37,6 +39,19 @@ struct Settings {
   bool lattice_given = false, density_given = false;
 };
 
+// An output size as oiiotool's --resize spells it: "WxH", "W" (the height
+// keeps the input's aspect), "Wx0" or "0xH" (0: that side keeps the aspect),
+// "P%" (both sides) or "P%xQ%" (a side may be a percentage and the other
+// pixels or 0). Per side: pixels, or a fraction of the input's side, or
+// neither (from the other side and the input's aspect).
+struct SizeSpec {
+  long width = 0, height = 0;                // pixels (0: not given in pixels)
+  double width_scale = 0, height_scale = 0;  // fraction of the input's side (0: not given so)
+  bool given() const { return width || height || width_scale || height_scale; }
+};
+// Throws RequestError naming --size and the spelling.
+SizeSpec parse_size(const std::string& spelling);
+
 // The settings in the engine's terms. Throws RequestError with the message
 // siproject prints ("--generator: unknown generator 'x' ...").
 struct Resolved {
@@ -49,12 +64,13 @@ struct Resolved {
   PrefilterMethod prefilter = PrefilterMethod::FFT;
   bool zero_nonfinite = false, highlight_compress = false;
   int threads = 1;                  // resolved: at least 1
-  std::pair<long, long> size{0, 0};  // --size, or 0 x 0
+  SizeSpec size;                     // --size (none: not given)
 };
 Resolved resolve(const Settings& settings);
 
-// The output size of an input of w x h samples: --size, or w / factor
-// rounded. Throws RequestError where neither is given or the result is empty.
+// The output size of an input of w x h samples: --size, w x scale or
+// w / factor, each side rounded to the nearest pixel (halves up, as oiiotool
+// rounds). Throws RequestError where neither is given or the result is empty.
 std::pair<long, long> output_size(const Settings& settings, const Resolved& r, long w, long h);
 
 struct FormRequest {

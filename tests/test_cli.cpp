@@ -1,0 +1,391 @@
+// The command lines as users of neighbouring tools type them: sizes and
+// names as oiiotool spells them, frame sequences and batches, the first
+// real error of a multi-threaded run, out of memory in every tool, and the
+// options' documentation.
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "sis/imageio.h"
+#include "sis/sequence.h"
+#include "support.h"
+
+namespace fs = std::filesystem;
+using namespace sis;
+using namespace sis::test;
+
+#if !defined(SIPROJECT) || !defined(SIMETRICS) || !defined(SISTABILITY) || !defined(DOCS_DIR)
+#error "SIPROJECT, SIMETRICS, SISTABILITY and DOCS_DIR must be defined"
+#endif
+
+namespace {
+
+Result run(const std::string& args) { return run_tool(SIPROJECT, args); }
+Result shell(const std::string& cmd) { return run_tool("bash -c", "'" + cmd + "'"); }
+
+class Cli : public TempDirTest {};
+
+void write_exr(const std::string& path, const Image& img, OIIO::TypeDesc type = OIIO::TypeDesc::FLOAT) {
+  OIIO::ImageSpec spec(int(img.width), int(img.height), img.channels, type);
+  auto out = OIIO::ImageOutput::create(path);
+  ASSERT_TRUE(out && out->open(path, spec) &&
+              out->write_image(OIIO::TypeDesc::FLOAT, img.data.data()) && out->close());
+}
+
+std::pair<long, long> size_of(const std::string& path) {
+  const Image im = read_image(path);
+  return {im.width, im.height};
+}
+
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+}  // namespace
+
+TEST_F(Cli, SizesAsOiiotoolSpellsThem) {
+  // 101 x 75: every spelling rounds each side to the nearest pixel, halves
+  // up, as oiiotool does (50% of 101 is 50.5: 51).
+  write_exr(path("in.exr"), random_image(101, 75, 1, 3));
+  const std::string in = path("in.exr") + " -q -o " + path("o.exr");
+  struct Case {
+    std::string opts;
+    long w, h;
+  };
+  const std::vector<Case> cases = {
+      {"--size 40x30", 40, 30},
+      {"--size 40", 40, 30},        // 40 * 75 / 101 = 29.7
+      {"--size 40x0", 40, 30},
+      {"--size 0x30", 40, 30},      // 30 * 101 / 75 = 40.4
+      {"--size 50%", 51, 38},       // 50.5, 37.5
+      {"--size 33%x50%", 33, 38},   // 33.33, 37.5
+      {"--size 20%x30", 20, 30},    // 20.2
+      {"--resize 50%", 51, 38},
+      {"--scale 0.5", 51, 38},
+      {"--scale 1.5", 152, 113},    // 151.5, 112.5
+      {"--factor 2", 51, 38},
+  };
+  for (const Case& c : cases) {
+    const Result r = run(in + " " + c.opts);
+    ASSERT_EQ(r.status, 0) << c.opts << ": " << r.output;
+    EXPECT_EQ(size_of(path("o.exr")), std::make_pair(c.w, c.h)) << c.opts;
+  }
+  // oiiotool's own --resize gives the same sizes where no side falls on a
+  // half pixel (there oiiotool 2.4 rounds either way: 50% of 101 is 52,
+  // 10% of 75 is 7)
+  for (const std::string g : {"0x30", "25%", "33%x50%"}) {
+    const Result o = run_tool("oiiotool", path("in.exr") + " --resize " + g +
+                                              " --echo \"{TOP.width}x{TOP.height}\"");
+    ASSERT_EQ(o.status, 0) << o.output;
+    ASSERT_EQ(run(in + " --size " + g).status, 0);
+    const auto [w, h] = size_of(path("o.exr"));
+    EXPECT_TRUE(contains(o.output, std::to_string(w) + "x" + std::to_string(h))) << g << ": " << o.output;
+  }
+  // one projection whatever the spelling: 50%, 0.5 and factor 2 on 100 x 76
+  write_exr(path("even.exr"), random_image(100, 76, 3, 4));
+  ASSERT_EQ(run(path("even.exr") + " -q -o " + path("f.exr") + " --factor 2").status, 0);
+  for (const std::string opts : {"--size 50%", "--scale 0.5", "--size 50x38", "--size 50", "--size 0x38"}) {
+    ASSERT_EQ(run(path("even.exr") + " -q -o " + path("s.exr") + " " + opts).status, 0) << opts;
+    EXPECT_EQ(read_image(path("s.exr")).data, read_image(path("f.exr")).data) << opts;
+  }
+  // a coefficient file evaluated at a percentage of its frame
+  ASSERT_EQ(run(path("even.exr") + " -q -o " + path("f.exr") + " --factor 2 --coeffs " + path("c.exr")).status, 0);
+  ASSERT_EQ(run(path("c.exr") + " -q -o " + path("big.exr") + " --size 200%").status, 0);
+  EXPECT_EQ(size_of(path("big.exr")), std::make_pair(100L, 76L));
+  // refused, naming the option, nothing written
+  fs::remove(path("o.exr"));
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"--size 0x0", "--size '0x0': expected WxH"},
+      {"--size 0", "--size '0': expected WxH"},
+      {"--size abc", "--size 'abc': expected WxH"},
+      {"--size 40x", "--size '40x': expected WxH"},
+      {"--size 40x30x2", "--size '40x30x2': expected WxH"},
+      {"--size -40x30", "expected WxH"},
+      {"--size 0%", "--size '0%': expected WxH"},
+      {"--size 1e3%", "--size '1e3%': expected WxH"},
+      {"--size 0.001%", "the output of the 101 x 75 image would be 0 x 0 pixels"},
+      {"--scale 0", "--scale 0: expected a finite number above 0"},
+      {"--scale nan", "--scale nan: expected a finite number above 0"},
+      {"--scale 0.5 --factor 2", "give one of --factor, --size and --scale"},
+      {"--size 50% --factor 2", "give one of --factor, --size and --scale"},
+      {"--scale 1e12", "more than 2147483647 per side"},
+  };
+  for (const auto& [opts, says] : bad) {
+    const Result r = run(in + " " + opts);
+    EXPECT_EQ(r.status, 2) << opts << ": " << r.output;
+    EXPECT_TRUE(contains(r.output, says)) << opts << ": " << r.output;
+    EXPECT_FALSE(fs::exists(path("o.exr"))) << opts;
+  }
+}
+
+TEST_F(Cli, AliasesGiveTheCanonicalNamesBits) {
+  // Each alias against its canonical name: the same pixels, and the
+  // canonical name in the metadata.
+  write_exr(path("in.exr"), random_image(60, 48, 3, 5));
+  const std::string in = path("in.exr") + " -q --factor 3 -d float ";
+  struct Case {
+    std::string canonical, alias, key, value;
+  };
+  const std::vector<Case> cases = {
+      {"--generator tent", "--generator triangle", "sis:generator", "tent"},
+      {"--generator tent", "--filter triangle", "sis:generator", "tent"},
+      {"--generator tent --method conventional", "--filter triangle --method conventional",
+       "sis:method", "conventional"},
+      {"--generator mitchell", "--filter mitchell", "sis:generator", "mitchell"},
+      {"--display centred", "--display center", "sis:display", "centred"},
+      {"--display centred", "--display centre", "sis:display", "centred"},
+      {"--display centred", "--display centered", "sis:display", "centred"},
+      {"--lattice hex", "--lattice hexagonal", "sis:lattice", "hexagonal"},
+      {"--lattice hex --generator hex-hat", "--lattice hexagonal --filter hex-hat", "sis:generator",
+       "hex-hat"},
+  };
+  for (const Case& c : cases) {
+    ASSERT_EQ(run(in + c.canonical + " -o " + path("a.exr")).status, 0) << c.canonical;
+    const Result r = run(in + c.alias + " -o " + path("b.exr"));
+    ASSERT_EQ(r.status, 0) << c.alias << ": " << r.output;
+    EXPECT_EQ(read_image(path("a.exr")).data, read_image(path("b.exr")).data) << c.alias;
+    EXPECT_EQ(ImageReader(path("b.exr")).attribute(c.key), c.value) << c.alias;
+    EXPECT_EQ(ImageReader(path("b.exr")).attribute("sis:generator"),
+              ImageReader(path("a.exr")).attribute("sis:generator")) << c.alias;
+  }
+  // the messages name the new spellings
+  Result r = run(in + "--lattice hexa -o " + path("c.exr"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(contains(r.output, "expected cartesian or hex (hexagonal)")) << r.output;
+}
+
+TEST(FrameRange, AsOiiotoolSpellsIt) {
+  using V = std::vector<long>;
+  EXPECT_EQ(parse_frame_range("7"), V({7}));
+  EXPECT_EQ(parse_frame_range("1-5"), V({1, 2, 3, 4, 5}));
+  EXPECT_EQ(parse_frame_range("5-1"), V({5, 4, 3, 2, 1}));
+  EXPECT_EQ(parse_frame_range("1-10x3"), V({1, 4, 7, 10}));
+  EXPECT_EQ(parse_frame_range("1-10y3"), V({2, 3, 5, 6, 8, 9}));
+  EXPECT_EQ(parse_frame_range("1-5x2"), V({1, 3, 5}));  // oiiotool's examples
+  EXPECT_EQ(parse_frame_range("1-5y2"), V({2, 4}));
+  EXPECT_EQ(parse_frame_range("3,4,10-20x2"), V({3, 4, 10, 12, 14, 16, 18, 20}));
+  EXPECT_EQ(parse_frame_range("0010-0012"), V({10, 11, 12}));
+  for (const std::string bad : {"", "a", "1-", "-3", "1,,2", "1,", "1-5x0", "1-5x", "1-5z2", "1.5",
+                                "0-2000000"})
+    EXPECT_THROW(parse_frame_range(bad), std::invalid_argument) << bad;
+}
+
+TEST(FramePattern, WildcardsAsOiiotoolSpellsThem) {
+  auto p = parse_frame_pattern("dir/big.1-3#.tif");
+  ASSERT_TRUE(p);
+  EXPECT_EQ(p->prefix, "dir/big.");
+  EXPECT_EQ(p->suffix, ".tif");
+  EXPECT_EQ(p->range, "1-3");
+  EXPECT_EQ(p->name(2), "dir/big.0002.tif");
+  EXPECT_EQ(parse_frame_pattern("f.#@@.exr")->name(12), "f.000012.exr");  // 4 + 1 + 1 digits
+  EXPECT_EQ(parse_frame_pattern("f.@@@.exr")->name(7), "f.007.exr");
+  EXPECT_EQ(parse_frame_pattern("f.%04d.exr")->name(7), "f.0007.exr");
+  EXPECT_EQ(parse_frame_pattern("f.%d.exr")->name(123), "f.123.exr");
+  EXPECT_EQ(parse_frame_pattern("f.#.exr", 3)->name(7), "f.007.exr");     // --framepadding
+  EXPECT_EQ(parse_frame_pattern("f.%04d.exr", 2)->name(7), "f.0007.exr");  // not for printf
+  EXPECT_EQ(parse_frame_pattern("f.1-10x2%03d.exr")->range, "1-10x2");
+  EXPECT_EQ(parse_frame_pattern("shot-1-3#.exr")->prefix, "shot-");
+  EXPECT_EQ(parse_frame_pattern("take.#.exr")->range, "");
+  EXPECT_FALSE(parse_frame_pattern("plain.exr"));
+  EXPECT_FALSE(parse_frame_pattern("100%.exr"));
+  EXPECT_FALSE(parse_frame_pattern("dir#/plain.exr"));  // folders are not patterns
+  EXPECT_THROW(parse_frame_pattern("f.#.#.exr"), std::invalid_argument);
+}
+
+TEST_F(Cli, FrameSequencesToAFolderAndToAPattern) {
+  // Three frames (distinct images) projected as a sequence give the three
+  // single runs' files, bit for bit, whatever the spelling.
+  fs::create_directory(path("in"));
+  for (int f = 1; f <= 3; ++f)
+    write_exr(path("in/f." + std::string("000") + std::to_string(f) + ".exr"),
+              random_image(48, 36, 3, 10 + f));
+  const std::string opts = " -q --factor 3 -d float";
+  fs::create_directory(path("single"));
+  for (int f = 1; f <= 3; ++f) {
+    const std::string n = "f.000" + std::to_string(f) + ".exr";
+    ASSERT_EQ(run(path("in/" + n) + " -o " + path("single/" + n) + opts).status, 0);
+  }
+  auto same_as_singles = [&](const std::string& pattern) {
+    for (int f = 1; f <= 3; ++f) {
+      char name[64];
+      std::snprintf(name, sizeof name, pattern.c_str(), f);
+      ASSERT_TRUE(fs::exists(name)) << name;
+      EXPECT_EQ(read_image(name).data,
+                read_image(path("single/f.000" + std::to_string(f) + ".exr")).data) << name;
+    }
+  };
+  struct Case {
+    std::string inputs, output, written;  // written: printf of each frame's output
+  };
+  const std::vector<Case> cases = {
+      {path("in/f.#.exr"), path("a/"), path("a/f.%04d.exr")},
+      {path("in/f.1-3#.exr"), path("b"), path("b/f.%04d.exr")},
+      {path("in/f.@@@@.exr"), path("c/out.%03d.exr"), path("c/out.%03d.exr")},
+      {"--frames 1-3 " + path("in/f.%04d.exr"), path("d/o.#.exr"), path("d/o.%04d.exr")},
+      {path("in/f.1-3#.exr"), path("e/o.1-3@.exr"), path("e/o.%d.exr")},
+      {path("in/f.0001.exr") + " " + path("in/f.0002.exr") + " " + path("in/f.0003.exr"), path("g/"),
+       path("g/f.%04d.exr")},
+  };
+  for (const Case& c : cases) {
+    fs::create_directories(fs::path(c.written).parent_path());
+    const Result r = run(c.inputs + " -o " + c.output + opts);
+    ASSERT_EQ(r.status, 0) << c.inputs << " -o " << c.output << ": " << r.output;
+    same_as_singles(c.written);
+    EXPECT_EQ(std::distance(fs::directory_iterator(fs::path(c.written).parent_path()),
+                            fs::directory_iterator()), 3) << c.output;
+  }
+  // backwards and with a step: the frames named, nothing else
+  fs::create_directory(path("h"));
+  ASSERT_EQ(run(path("in/f.3-1x2#.exr") + " -o " + path("h/") + opts).status, 0);
+  EXPECT_TRUE(fs::exists(path("h/f.0001.exr")) && fs::exists(path("h/f.0003.exr")));
+  EXPECT_FALSE(fs::exists(path("h/f.0002.exr")));
+  // the coefficient files of a sequence, to a pattern
+  fs::create_directory(path("k"));
+  ASSERT_EQ(run(path("in/f.#.exr") + " -o " + path("k/") + " --coeffs " + path("k/c.#.exr") + opts).status, 0);
+  for (int f = 1; f <= 3; ++f)
+    EXPECT_EQ(ImageReader(path("k/c.000" + std::to_string(f) + ".exr")).attribute("sis:input"),
+              "f.000" + std::to_string(f) + ".exr");
+}
+
+TEST_F(Cli, FrameSequencesRefuseWhatTheyCannotDo) {
+  fs::create_directory(path("in"));
+  for (int f = 1; f <= 3; ++f)
+    write_exr(path("in/f.000" + std::to_string(f) + ".exr"), random_image(48, 36, 3, 20 + f));
+  fs::create_directory(path("out"));
+  const std::string opts = " --factor 3";
+  struct Case {
+    std::string args;
+    int status;
+    std::string says;
+  };
+  const std::vector<Case> cases = {
+      // a missing frame of a range: nothing runs
+      {path("in/f.1-4#.exr") + " -o " + path("out/"), 3,
+       path("in/f.0004.exr") + ": no such file (frame 4 of " + path("in/f.1-4#.exr") + ")"},
+      {"--frames 2-5 " + path("in/f.#.exr") + " -o " + path("out/"), 3, "f.0004.exr: no such file (frame 4"},
+      {path("in/g.#.exr") + " -o " + path("out/"), 3, "g.#.exr: no file matches the frame pattern"},
+      // several frames, one output file
+      {path("in/f.#.exr") + " -o " + path("out/one.exr"), 2,
+       "3 input frames and one output file " + path("out/one.exr") + ": give -o a folder"},
+      {path("in/f.0001.exr") + " " + path("in/f.0002.exr") + " -o " + path("out/one.exr"), 2,
+       "row bands of one image: --bands"},
+      // a pattern output needs numbered inputs
+      {path("in/f.0001.exr") + " " + path("in/f.0002.exr") + " -o " + path("out/o.#.exr"), 2,
+       "a pattern numbers frames from numbered inputs"},
+      {path("in/f.1-3#.exr") + " -o " + path("out/o.1-2#.exr"), 2, "its frame range is not the inputs' frames"},
+      {path("in/f.1-3#.exr") + " --frames 1-3 -o " + path("out/"), 2, "give one"},
+      {path("in/f.0001.exr") + " --frames 1-3 -o " + path("out/"), 2, "no input has a frame wildcard"},
+      {path("in/f.#.exr") + " -o " + path("in/"), 2, "would be written over an input frame"},
+      {path("in/f.#.exr") + " -o " + path("nowhere/"), 4, "-o " + path("nowhere/") + ": no such folder"},
+      {path("in/f.#.#.exr") + " -o " + path("out/"), 2, "more than one frame wildcard"},
+      {path("in/f.#.exr") + " -o " + path("out/") + " --coeffs " + path("out/c.exr"), 2,
+       "give --coeffs a folder or a pattern"},
+      {"--bands " + path("in/f.#.exr") + " -o " + path("out/"), 2, "--bands makes one image"},
+      {path("in/f.#.exr") + " --frames 1-2,x -o " + path("out/"), 2, "--frames: frame range '1-2,x'"},
+  };
+  for (const Case& c : cases) {
+    const Result r = run(c.args + opts);
+    EXPECT_EQ(r.status, c.status) << c.args << ": " << r.output;
+    EXPECT_TRUE(contains(r.output, c.says)) << c.args << ": " << r.output;
+    EXPECT_TRUE(fs::is_empty(path("out"))) << c.args;
+  }
+  // One frame that fails stops the sequence, as oiiotool stops: the frames
+  // before it written whole, it and those after not, no temporary file,
+  // the input's status.
+  Image bad = random_image(48, 36, 3, 22);
+  bad.at(5, 5, 0) = NAN;
+  write_exr(path("in/f.0002.exr"), bad);
+  const Result r = run(path("in/f.#.exr") + " -o " + path("out/") + opts);
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_TRUE(contains(r.output, "f.0002.exr: non-finite sample")) << r.output;
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(path("out"))) names.push_back(e.path().filename());
+  EXPECT_EQ(names, std::vector<std::string>{"f.0001.exr"});
+}
+
+TEST_F(Cli, HexagonalBandsReportTheFirstRealError) {
+  // 4000 rows: 16 bands of the acquisition, taken on 3 to 8 threads. A NaN
+  // in a late band, or a file cut short, is reported as such (status 3),
+  // never as the bands that gave up waiting on it, at every thread count
+  // and run after run.
+  Image img = random_image(200, 4000, 3, 41);
+  write_exr(path("whole.exr"), img, OIIO::TypeDesc::HALF);
+  img.at(17, 3300, 2) = NAN;
+  write_exr(path("nan.exr"), img, OIIO::TypeDesc::HALF);
+  {
+    const auto size = fs::file_size(path("whole.exr"));
+    std::ifstream in(path("whole.exr"), std::ios::binary);
+    std::string bytes(size * 6 / 10, '\0');
+    in.read(bytes.data(), std::streamsize(bytes.size()));
+    std::ofstream(path("cut.exr"), std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+  }
+  for (int t : {3, 4, 8})
+    for (int rep = 0; rep < 4; ++rep) {
+      const std::string opts = " --factor 4 --lattice hex --threads " + std::to_string(t) + " -o " + path("o.exr");
+      Result r = run(path("nan.exr") + opts);
+      EXPECT_EQ(r.status, 3) << t << " threads: " << r.output;
+      EXPECT_TRUE(contains(r.output, "nan.exr: non-finite sample (NaN or Inf) at x 17, y 3300, channel B"))
+          << t << " threads: " << r.output;
+      r = run(path("cut.exr") + opts);
+      EXPECT_EQ(r.status, 3) << t << " threads: " << r.output;
+      EXPECT_TRUE(contains(r.output, "cut.exr: cannot read rows")) << t << " threads: " << r.output;
+      EXPECT_TRUE(contains(r.output, "truncated file")) << t << " threads: " << r.output;
+      EXPECT_FALSE(contains(r.output, "abandoned")) << t << " threads: " << r.output;
+      EXPECT_FALSE(fs::exists(path("o.exr")));
+    }
+}
+
+TEST_F(Cli, EveryToolReportsRunningOutOfMemory) {
+  // Under a 1 GB address-space limit: a message and status 1, not an
+  // uncaught std::bad_alloc (which aborts, status 134 through the shell).
+  Result r = shell("ulimit -v 1000000; " + std::string(SISTABILITY) + " --size 4096 --factor 16");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_TRUE(contains(r.output, "sistability: out of memory (--size 4096 --factor 16")) << r.output;
+  // simetrics: an image whose pixels pass the limit (its header is small)
+  const std::string big = path("big.exr");
+  {
+    OIIO::ImageSpec spec(20000, 20000, 4, OIIO::TypeDesc::HALF);
+    spec.tile_width = spec.tile_height = 64;
+    auto out = OIIO::ImageOutput::create(big);
+    ASSERT_TRUE(out && out->open(big, spec));
+    std::vector<std::uint16_t> tile(64 * 64 * 4, 0x3c00);
+    for (int y = 0; y < 20000; y += 64)
+      for (int x = 0; x < 20000; x += 64)
+        ASSERT_TRUE(out->write_tile(x, y, 0, OIIO::TypeDesc::HALF, tile.data()));
+    ASSERT_TRUE(out->close());
+  }
+  r = shell("ulimit -v 1000000; " + std::string(SIMETRICS) + " " + big);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_TRUE(contains(r.output, "simetrics: out of memory")) << r.output;
+}
+
+TEST(Docs, EveryOptionOfSiprojectIsDocumented) {
+  // Every long option siproject --help prints appears in docs/siproject.md,
+  // written as `--option` (the table's or the text's code spans).
+  const Result help = run("--help");
+  ASSERT_EQ(help.status, 0);
+  std::ifstream in(std::string(DOCS_DIR) + "/siproject.md");
+  std::stringstream doc;
+  doc << in.rdbuf();
+  const std::string md = doc.str();
+  // the option lines: "  -o,--output TEXT ...", "  --size,--resize TEXT ..."
+  std::set<std::string> options;
+  const std::regex line("^ +(-[a-zA-Z],)?(--[a-z][a-z0-9-]*)(,(--[a-z][a-z0-9-]*))?");
+  std::istringstream lines(help.output);
+  for (std::string l; std::getline(lines, l);) {
+    std::smatch m;
+    if (!std::regex_search(l, m, line)) continue;
+    options.insert(m[2]);
+    if (m[4].matched) options.insert(m[4]);
+  }
+  ASSERT_GE(options.size(), 25u) << help.output;  // the options section was read
+  for (const std::string& o : options) {
+    if (o == "--help") continue;
+    EXPECT_TRUE(std::regex_search(md, std::regex("`" + o + "[` ,=]"))) << o << " is not in docs/siproject.md";
+  }
+}
