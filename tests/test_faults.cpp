@@ -13,6 +13,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -23,6 +24,7 @@
 #include <OpenEXR/ImfArray.h>
 #include <OpenEXR/ImfRgbaFile.h>
 
+#include "sis/engine.h"
 #include "sis/imageio.h"
 #include "support.h"
 
@@ -292,8 +294,11 @@ TEST_F(Faults, SignalsDuringTheWriteLeaveNoFile) {
   // siproject is stopped the moment its staged output appears, sent the
   // signal, and let go: it ends by that signal, its staged file is gone and
   // the file that had the output's name is as it was.
+  // SIGABRT and the faults' signals are what a library's assertion or a
+  // crash in a writer raises (OpenImageIO 2.4's DPX writer aborts on 2
+  // channels): they too leave no staged file.
   write_exr(path("big.exr"), random_image(1600, 1600, 3, 9), false);
-  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+  for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGSYS}) {
     // A stop that lands after the rename (the file seen, then renamed before
     // SIGSTOP arrives, on a busy machine) is a lost race, not a finding: the
     // run is let go and tried again.
@@ -304,6 +309,8 @@ TEST_F(Faults, SignalsDuringTheWriteLeaveNoFile) {
       ASSERT_GE(pid, 0);
       if (pid == 0) {
         const std::string in = path("big.exr"), out = path("o.exr");
+        const rlimit no_core{0, 0};
+        setrlimit(RLIMIT_CORE, &no_core);
         execl(SIPROJECT, SIPROJECT, in.c_str(), "-o", out.c_str(), "--factor", "1", "-d", "float",
               "-q", static_cast<char*>(nullptr));
         _exit(127);
@@ -734,4 +741,100 @@ TEST_F(Faults, OpenExrKindsOpenImageIORefusesOrHides) {
   EXPECT_EQ(r.status, 3) << r.output;
   EXPECT_NE(r.output.find("empty.exr: empty file"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("x.exr")));
+}
+
+namespace {
+// Row band `y0` of `full_h` rows, `w` wide, in an EXR written beside `path`
+// and renamed onto it (a new file under the old name, as a render or a copy
+// that replaces one does).
+void replace_band(const std::string& path, const Image& img, int y0, int full_h) {
+  const std::string fresh = path + ".new.exr";
+  write_exr(fresh, img, true, 0, 0, y0, full_h);
+  fs::rename(fresh, path);
+}
+}  // namespace
+
+TEST_F(Faults, BandFilesReplacedDuringARunAreInputErrors) {
+  // Three row bands of 40 x 90 (30 rows each). A band replaced between
+  // its first opening and a later one (read_bands' header pass, then the
+  // worker that reads it; inspect, then the reading) by a file of another
+  // width overflowed buffers sized by the first header; by a file of the
+  // same header it mixed two images. Either is an input error naming the
+  // band, every worker count.
+  const long w = 40, h = 90;
+  auto bands_of = [&](long width, unsigned seed) {
+    std::vector<Image> b;
+    for (int i = 0; i < 3; ++i) b.push_back(random_image(width, 30, 3, seed + i));
+    return b;
+  };
+  const std::vector<std::string> paths = {path("b0.exr"), path("b1.exr"), path("b2.exr")};
+  for (int workers : {1, 2, 3}) {
+    for (const bool wider : {true, false}) {
+      SCOPED_TRACE(std::to_string(workers) + " workers, " + (wider ? "wider" : "same header"));
+      const auto first = bands_of(w, 30);
+      for (int i = 0; i < 3; ++i) write_exr(paths[i], first[i], true, 0, 0, 30 * i, int(h));
+      const Image other = random_image(wider ? 10 * w : w, 30, 3, 99);
+      // read_bands: the last band's file replaced once the first band begins
+      std::atomic<bool> replaced{false};
+      BandCallbacks cb;
+      cb.begin = [&](int, long band) {  // (band 0 is taken first: the others wait for it)
+        if (band == 0) {
+          replace_band(paths[2], other, 60, int(h));
+          replaced = true;
+        }
+        while (!replaced) std::this_thread::yield();
+      };
+      cb.strip = [&](int, const Strip&) { return true; };
+      cb.end = [&](int, long) {};
+      try {
+        read_bands(paths, BandPartition(h, 30), 16, workers, true, cb);
+        ADD_FAILURE() << "no error";
+      } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_EQ(m.rfind(paths[2] + ": ", 0), 0u) << m;
+        EXPECT_NE(m.find(wider ? "changed on disk during the run" : "replaced or modified on disk"),
+                  std::string::npos) << m;
+        if (wider) {
+          EXPECT_NE(m.find("it is now 400 x 30"), std::string::npos) << m;
+        }
+      }
+      // the engine: inspected, then replaced, then projected
+      for (int i = 0; i < 3; ++i) write_exr(paths[i], first[i], true, 0, 0, 30 * i, int(h));
+      ProjectionRequest rq;
+      for (const std::string& p : paths) rq.inputs.push_back(ProjectionInput::file(p));
+      rq.width = w / 2;
+      rq.height = h / 2;
+      rq.threads = workers;
+      InputSet set = inspect(rq.inputs);
+      replace_band(paths[1], other, 30, int(h));
+      try {
+        project(rq, std::move(set));
+        ADD_FAILURE() << "no error";
+      } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_EQ(m.rfind(paths[1] + ": ", 0), 0u) << m;
+        EXPECT_NE(m.find(wider ? "changed on disk during the run" : "replaced or modified on disk"),
+                  std::string::npos) << m;
+      }
+    }
+  }
+  // A coefficient file whose header was read (inspect), then replaced by
+  // another before its grid is loaded.
+  write_exr(path("in.exr"), random_image(64, 48, 3, 2), false);
+  ASSERT_EQ(run(path("in.exr") + " -o " + path("o.exr") + " --factor 4 --coeffs " + path("c.exr") +
+                " -q").status, 0);
+  ASSERT_EQ(run(path("in.exr") + " -o " + path("o.exr") + " --factor 2 --coeffs " + path("d.exr") +
+                " -q").status, 0);
+  ImageReader header(path("c.exr"));
+  header.release();
+  fs::rename(path("d.exr"), path("c.exr"));
+  try {
+    load_coefficients(path("c.exr"), false, nullptr, header.signature());
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path("c.exr") + ": changed on disk during the run"),
+              std::string::npos) << e.what();
+  }
+  // the file as first opened is read as always
+  EXPECT_NO_THROW(load_coefficients(path("c.exr"), false, nullptr, ImageReader(path("c.exr")).signature()));
 }

@@ -219,7 +219,7 @@ int run(const Options& o) {
       throw UsageError("--coeffs " + o.coeffs + " holds a highlight-compressed approximation: its "
                        "continuous error is not measured");
     reader.release();
-    const Coefficients k = load_coefficients(o.coeffs, false);
+    const Coefficients k = load_coefficients(o.coeffs, false, nullptr, reader.signature());
     Report inner;
     inner.string("coeffs", o.coeffs);
     inner.string("method", k.min_error ? "min-error" : "conventional");

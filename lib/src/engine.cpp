@@ -259,6 +259,7 @@ struct Reading {
   bool memory = false, half = false;
   std::vector<std::string> names;
   std::vector<SampleView> images;
+  std::vector<FileSignature> signatures;  // the files as inspected
   int workers = 1;
   long strip = 0;
 };
@@ -270,6 +271,9 @@ Reading plan_reading(const InputSet& in, int threads, const BandPartition& bands
   for (const ProjectionInput& b : in.bands) {
     g.names.push_back(g.memory ? b.name : b.path);
     g.images.push_back(b.image);
+    g.signatures.emplace_back();
+    for (const auto& r : in.readers)
+      if (!b.image && r->path() == b.path) g.signatures.back() = r->signature();
   }
   bool exr = true;
   if (!g.memory)
@@ -291,7 +295,8 @@ Reading plan_reading(const InputSet& in, int threads, const BandPartition& bands
 NonFiniteReport read_grid(const Reading& g, const BandPartition& bands, const BandCallbacks& cb,
                           const std::vector<NonFiniteReport>& bad) {
   std::vector<BandSource> sources;
-  for (std::size_t f = 0; f < g.names.size(); ++f) sources.push_back({g.names[f], g.images[f]});
+  for (std::size_t f = 0; f < g.names.size(); ++f)
+    sources.push_back({g.names[f], g.images[f], g.signatures[f]});
   read_bands(sources, bands, g.strip, g.workers, g.half, cb);
   NonFiniteReport all;
   for (const NonFiniteReport& n : bad) {
@@ -595,8 +600,8 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
 Projection project(const ProjectionRequest& rq) { return project(rq, inspect(rq.inputs)); }
 
 Coefficients load_coefficients(const std::string& path, bool zero_nonfinite,
-                               NonFiniteReport* replaced) {
-  ImageReader file(path);
+                               NonFiniteReport* replaced, const FileSignature& expected) {
+  ImageReader file(path, expected);
   const std::uint64_t stored = std::uint64_t(file.width()) * std::uint64_t(file.height());
   check_memory(projection_bytes(0, 0, file.channels(), stored + stored / 2, false, false, 1),
                "a coefficient grid of " + std::to_string(file.width()) + " x " +

@@ -63,6 +63,7 @@ struct ImageReader::Impl {
   long cached_tile_row = -1;
   int cached_elem = 0;
   std::vector<unsigned char> tile_row;
+  FileSignature signature;
 };
 
 namespace {
@@ -76,9 +77,38 @@ std::string failure(const std::string& why) {
   return why;
 }
 
+// The header fields a reading relies on, as one line for comparison and
+// for messages.
+std::string describe(const ImageSpec& s, const std::string& format) {
+  std::ostringstream d;
+  d << s.width << " x " << s.height << " at (" << s.x << ", " << s.y << ") of " << s.full_width
+    << " x " << s.full_height << " at (" << s.full_x << ", " << s.full_y << "), " << s.nchannels
+    << " channels";
+  for (int c = 0; c < s.nchannels; ++c)
+    d << (c ? ", " : " (") << (c < int(s.channelnames.size()) ? s.channelnames[c] : "?") << " "
+      << s.channelformat(c).c_str();
+  d << ")";
+  if (s.tile_width > 0) d << ", tiles " << s.tile_width << " x " << s.tile_height;
+  d << ", " << format;
+  return d.str();
+}
+
 }  // namespace
 
-ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path) {
+void check_path(const std::string& path, bool output) {
+  if (path.find('\0') == std::string::npos) return;
+  std::string shown;
+  for (char c : path) shown += c == '\0' ? std::string("\\0") : std::string(1, c);
+  const std::string m = shown + ": a file name cannot hold a NUL character (\\0)";
+  if (output) throw OutputError(m);
+  throw InputError(m);
+}
+
+ImageReader::ImageReader(const std::string& path) : ImageReader(path, FileSignature{}) {}
+
+ImageReader::ImageReader(const std::string& path, const FileSignature& expected)
+    : impl_(new Impl), path_(path) {
+  check_path(path);
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path + ": no such file");
   if (fs::is_directory(path, ec)) throw InputError(path + ": is a folder, not an image");
@@ -89,8 +119,11 @@ ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path)
   // OpenImageIO reports any file it cannot open as one it cannot parse.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
+  struct stat st;
+  const int stat_error = ::fstat(fd, &st) == 0 ? 0 : errno;
   ::close(fd);
-  if (fs::file_size(path, ec) == 0) throw InputError(path + ": empty file (0 bytes)");
+  if (stat_error) throw InputError(path + ": cannot open: " + std::strerror(stat_error));
+  if (st.st_size == 0) throw InputError(path + ": empty file (0 bytes)");
   // OpenImageIO first; a file it refuses may be a luminance-chroma OpenEXR
   // (probed only then: a decoder made and freed before the reading raises
   // glibc's dynamic mmap threshold, a higher peak).
@@ -120,7 +153,24 @@ ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path)
   }
   if (s.depth > 1) throw InputError(path + ": volume images are not supported");
   if (s.deep) throw InputError(path + ": deep images are not supported");
+  FileSignature& sig = impl_->signature;
+  sig.known = true;
+  sig.device = std::uint64_t(st.st_dev);
+  sig.inode = std::uint64_t(st.st_ino);
+  sig.size = std::uint64_t(st.st_size);
+  sig.mtime_ns = std::int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
+  sig.header = describe(s, impl_->format);
+  if (!expected.known) return;
+  if (sig.header != expected.header)
+    throw InputError(path + ": changed on disk during the run: it was " + expected.header +
+                     ", it is now " + sig.header);
+  if (sig.device != expected.device || sig.inode != expected.inode || sig.size != expected.size ||
+      sig.mtime_ns != expected.mtime_ns)
+    throw InputError(path + ": replaced or modified on disk during the run (another file, size or "
+                     "modification time than when it was first opened)");
 }
+
+const FileSignature& ImageReader::signature() const { return impl_->signature; }
 
 ImageReader::~ImageReader() { release(); }
 
@@ -137,6 +187,7 @@ int ImageReader::parts() const { return std::max(1, impl_->parts); }
 bool ImageReader::luminance_chroma() const { return impl_->luminance_chroma; }
 
 bool ImageReader::is_luminance_chroma(const std::string& path) {
+  if (path.find('\0') != std::string::npos) return false;
   try {
     if (!Imf::isOpenExrFile(path.c_str())) return false;
     Imf::InputFile probe(path.c_str(), 1);
@@ -382,6 +433,9 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
   // glibc's dynamic mmap threshold, and the reading's buffers then stay on
   // the heap: a higher peak).
   std::vector<std::unique_ptr<ImageReader>> first_readers(paths.size());
+  // What each file was at this first opening: a worker that opens it again
+  // reads it only while it still is (buffers are sized by these headers).
+  std::vector<FileSignature> signatures(paths.size());
   for (std::size_t f = 0; f < paths.size(); ++f) {
     if (const SampleView& im = sources[f].image) {  // samples in memory
       if (half != im.half)
@@ -391,8 +445,9 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
       values = std::max(values, std::size_t(std::min(strip, im.height)) * im.row_size());
       continue;
     }
-    auto opened = std::make_unique<ImageReader>(paths[f]);
+    auto opened = std::make_unique<ImageReader>(paths[f], sources[f].expected);
     const ImageReader& r = *opened;
+    signatures[f] = r.signature();
     if (T > 1 && r.format_name() != "openexr")
       throw std::logic_error(r.path() +
                              ": read_bands() with several workers on a file not OpenEXR");
@@ -423,7 +478,7 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
     if (t == 0) readers = std::move(first_readers);
     auto reader = [&](std::size_t f) -> ImageReader& {
       for (std::size_t e = 0; e < f; ++e) readers[e].reset();
-      if (!readers[f]) readers[f] = std::make_unique<ImageReader>(paths[f]);
+      if (!readers[f]) readers[f] = std::make_unique<ImageReader>(paths[f], signatures[f]);
       return *readers[f];
     };
     Buffer<std::uint16_t> half_rows(half ? values : 0);  // unset: each strip is read into them

@@ -196,7 +196,7 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
     f.from_coefficient_file = true;
     f.input_half = reader.attribute("sis:input_format") == "half";
     const auto t = Clock::now();
-    k = load_coefficients(reader.path(), r.zero_nonfinite, &f.replaced);
+    k = load_coefficients(reader.path(), r.zero_nonfinite, &f.replaced, reader.signature());
     f.highlight_compressed = reader.attribute("sis:highlight_compress") == "1";
     f.acquire_seconds = seconds_since(t);
     if (f.replaced.count)

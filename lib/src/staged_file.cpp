@@ -32,9 +32,20 @@ struct Slot {
 Slot registry[kSlots];
 std::mutex registry_mutex;  // claiming and releasing slots (not the handler)
 
-const int kCleanupSignals[] = {SIGINT,  SIGTERM, SIGHUP,  SIGQUIT, SIGPIPE,
-                               SIGALRM, SIGXCPU, SIGUSR1, SIGUSR2};
+// Signals sent to the process, held while a staged file is created or
+// removed.
+const int kCleanupSignals[] = {SIGINT,  SIGTERM, SIGHUP,  SIGQUIT,   SIGPIPE, SIGALRM,
+                               SIGXCPU, SIGUSR1, SIGUSR2, SIGVTALRM};
+// Signals of a failure in the process itself (an abort in a library, a
+// fault): never held (a fault while held ends the process unhandled), and
+// handled on an alternate stack where there is one (a stack overflow).
+const int kFatalSignals[] = {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGSYS};
 
+static_assert(std::atomic<int>::is_always_lock_free, "the handler reads the slots' flags");
+
+// Async-signal-safe: atomic loads, unlink, signal and raise only. The
+// signal raised again is blocked until the handler returns; a fault's
+// instruction, run again, then faults under the default action.
 extern "C" void remove_and_reraise(int sig) {
   for (Slot& s : registry)
     if (s.active.load()) ::unlink(s.path);
@@ -160,16 +171,30 @@ void StagedFile::commit() {
 }
 
 void remove_staged_files_on_signals() {
-  for (int sig : kCleanupSignals) {
+  // An alternate stack for this thread's handler, unless it has one.
+  static char alternate[1 << 16];
+  stack_t current;
+  if (sigaltstack(nullptr, &current) == 0 && (current.ss_flags & SS_DISABLE)) {
+    stack_t st;
+    st.ss_sp = alternate;
+    st.ss_size = sizeof alternate;
+    st.ss_flags = 0;
+    sigaltstack(&st, nullptr);
+  }
+  auto install = [](int sig) {
     struct sigaction old;
-    if (sigaction(sig, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) continue;
+    if (sigaction(sig, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) return;
     struct sigaction sa;
     std::memset(&sa, 0, sizeof sa);
     sa.sa_handler = remove_and_reraise;
+    sa.sa_flags = SA_ONSTACK;
     sigemptyset(&sa.sa_mask);
     for (int s : kCleanupSignals) sigaddset(&sa.sa_mask, s);
+    for (int s : kFatalSignals) sigaddset(&sa.sa_mask, s);
     sigaction(sig, &sa, nullptr);
-  }
+  };
+  for (int sig : kCleanupSignals) install(sig);
+  for (int sig : kFatalSignals) install(sig);
   struct sigaction old;
   if (sigaction(SIGXFSZ, nullptr, &old) == 0 && old.sa_handler == SIG_DFL) ::signal(SIGXFSZ, SIG_IGN);
 }

@@ -180,7 +180,7 @@ PyCoefficients load_file(const std::string& path, bool zero_nonfinite, int threa
     reader.release();
     out.threads = resolved_threads(threads);
     py::gil_scoped_release free;
-    out.k = load_coefficients(path, zero_nonfinite);
+    out.k = load_coefficients(path, zero_nonfinite, nullptr, reader.signature());
     return out;
   });
 }

@@ -132,9 +132,12 @@ Projection project(const ProjectionRequest& request);
 Projection project(const ProjectionRequest& request, InputSet inspected);
 
 // A coefficient file, read and checked: non-finite coefficients are an
-// InputError, or replaced by 0 (counted in `replaced`).
+// InputError, or replaced by 0 (counted in `replaced`). With `expected`
+// (the signature of a reader that read its header first), a file that is
+// no longer that file is an InputError.
 Coefficients load_coefficients(const std::string& path, bool zero_nonfinite,
-                               NonFiniteReport* replaced = nullptr);
+                               NonFiniteReport* replaced = nullptr,
+                               const FileSignature& expected = {});
 
 struct FinalImage {
   Image image;

@@ -42,10 +42,32 @@ bool half_to_float(const std::uint16_t* in, float* out, std::size_t n);
 // processor has it. Half outputs are converted here, not in the writer.
 void float_to_half(const float* in, std::uint16_t* out, std::size_t n);
 
+// What a file was when a reader opened it: its identity on disk (device,
+// inode, size, modification time) and the header its reading relies on
+// (data and display windows, channels, their names and sample types, the
+// tiling, the format). A file opened again by name (read_bands' workers,
+// the engine after inspect, a coefficient file after its header was read)
+// must be the same file, or it was replaced or changed in between.
+struct FileSignature {
+  bool known = false;  // false: nothing to compare with
+  std::uint64_t device = 0, inode = 0, size = 0;
+  std::int64_t mtime_ns = 0;
+  std::string header;  // "300 x 530 at (0, 0) of 300 x 530 at (0, 0), 3 channels R G B half, ..."
+};
+
+// Refuses a path that holds a NUL character (C strings end there: another
+// file would be opened). Throws InputError, or OutputError with `output`.
+void check_path(const std::string& path, bool output = false);
+
 // Reads an image in row strips as float, whatever its stored type.
 class ImageReader {
  public:
   explicit ImageReader(const std::string& path);  // throws InputError
+  // Opens `path` again: an InputError naming it unless it is still the
+  // file `expected` describes (when known).
+  ImageReader(const std::string& path, const FileSignature& expected);
+  // The file as it was opened (kept after release()).
+  const FileSignature& signature() const;
   ~ImageReader();
   ImageReader(const ImageReader&) = delete;
   ImageReader& operator=(const ImageReader&) = delete;
@@ -157,6 +179,11 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
 struct BandSource {
   std::string name;   // a file's path, or how messages name the samples
   SampleView image;   // samples in memory
+  // A file: what it was when inspected (when known): a file that is no
+  // longer that file when read_bands opens it is an InputError. Files that
+  // a worker opens again are checked against read_bands' own first opening
+  // in any case.
+  FileSignature expected = {};
 };
 long read_bands(const std::vector<BandSource>& sources, const BandPartition& bands, long strip,
                 int workers, bool half, const BandCallbacks& callbacks);

@@ -40,9 +40,12 @@ class StagedFile {
 };
 
 // Installs handlers for SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE, SIGALRM,
-// SIGXCPU, SIGUSR1 and SIGUSR2 that remove every uncommitted staged file,
-// then end the process by the same signal (its default action); a signal
-// that is ignored stays ignored. SIGXFSZ is ignored, so that a write past
+// SIGXCPU, SIGUSR1, SIGUSR2 and SIGVTALRM, and for the signals of a failure
+// in the process (SIGABRT: an assertion or abort() in a library; SIGSEGV,
+// SIGBUS, SIGFPE, SIGILL, SIGSYS; on an alternate stack for the calling
+// thread), that remove every uncommitted staged file, then end the process
+// by the same signal (its default action: a core dump where enabled); a
+// signal that is ignored stays ignored. SIGXFSZ is ignored, so that a write past
 // the file size limit fails as an error (EFBIG) and is reported. For
 // programs (the tools); a library user keeps its own handlers.
 void remove_staged_files_on_signals();
