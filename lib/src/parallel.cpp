@@ -53,6 +53,7 @@ class WorkerPool {
   WorkerPool() {
     static const int registered = pthread_atfork(nullptr, nullptr, [] { instance().after_fork(); });
     (void)registered;
+    keep_fork_safe();
   }
 
   // Runs part(k) for k in [0, parts) on the caller and parts - 1 workers.

@@ -6,10 +6,6 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <dlfcn.h>
-#include <link.h>
-#include <pthread.h>
-
 #include <atomic>
 #include <chrono>
 #include <climits>
@@ -27,6 +23,7 @@
 
 #include "sis/engine.h"
 #include "sis/metrics.h"
+#include "sis/parallel.h"
 #include "sis/settings.h"
 #include "sis/space.h"
 #include "sis/staged_file.h"
@@ -377,35 +374,10 @@ Image image_of(const FloatArray& a, const char* what) {
   return im;
 }
 
-// Debian's OpenImageIO loads OpenVDB, which loads log4cplus 2.0: it starts
-// a pool of threads when loaded and joins them at the process's exit, and a
-// child of fork() (which has none of them) would wait there for ever. Before
-// a fork that pool is shut down by log4cplus's own shutdownThreadPool()
-// (exported by 2.0, not declared in its headers; nothing in the process
-// logs through the pool). Found among the loaded libraries by name: the
-// module's dependencies are not in the global scope dlsym(RTLD_DEFAULT)
-// searches.
-void (*log4cplus_shutdown_thread_pool)() = nullptr;
-
-void shut_log4cplus_pool_before_fork() {
-  dl_iterate_phdr(
-      [](dl_phdr_info* info, std::size_t, void*) {
-        if (!info->dlpi_name || !std::strstr(info->dlpi_name, "liblog4cplus")) return 0;
-        void* lib = dlopen(info->dlpi_name, RTLD_LAZY | RTLD_NOLOAD);
-        if (!lib) return 0;
-        if (void* f = dlsym(lib, "_ZN9log4cplus18shutdownThreadPoolEv"))
-          log4cplus_shutdown_thread_pool = reinterpret_cast<void (*)()>(f);
-        return 1;  // the handle is kept: the library stays loaded
-      },
-      nullptr);
-  if (log4cplus_shutdown_thread_pool)
-    pthread_atfork([] { log4cplus_shutdown_thread_pool(); }, nullptr, nullptr);
-}
-
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
-  shut_log4cplus_pool_before_fork();
+  keep_fork_safe();  // a child of os.fork() projects again and exits
   m.doc() = "The engine of siproject (see the siproject package for the documented API).";
   m.attr("__version__") = SIS_PYTHON_VERSION;  // the project's (CMakeLists.txt)
   py::class_<PyCoefficients>(m, "Coefficients")

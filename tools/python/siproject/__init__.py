@@ -171,7 +171,7 @@ def _size(size: Optional[Size], output_shape=None, factor=None) -> str:
 def _samples(input: Input):
     """A path as a str, an array as C-contiguous float32 or float16 (H, W, C)."""
     if isinstance(input, (str, os.PathLike)):
-        return os.fspath(input)
+        return _path("input", input)
     a = np.asarray(input)
     if a.ndim == 2:
         a = a[:, :, np.newaxis]
