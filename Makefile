@@ -9,7 +9,10 @@
 #   make install     build, then install into PREFIX (default /usr/local):
 #                    bin/siproject and bin/simetrics, the library and its
 #                    headers with a CMake package (find_package(sis)), and the
-#                    Python module in lib/pythonX.Y/site-packages
+#                    Python module where INSTALL_PYTHON (default python3) looks
+#                    under PREFIX (Debian's: lib/pythonX.Y/dist-packages), or,
+#                    where it does not look, lib/pythonX.Y/site-packages and a
+#                    note of how to use it (pip install . builds a wheel instead)
 #   make docs        refresh the snapshots committed in docs/ from the latest
 #                    reports in out/ (make compare, make bench) and the
 #                    default scene's images (the README's picture)
@@ -113,8 +116,9 @@ test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 PREFIX ?= /usr/local
+INSTALL_PYTHON ?= python3
 install: build
-	@cmake --install $(BUILD) --prefix $(PREFIX)
+	@SIS_INSTALL_PYTHON="$$(command -v $(INSTALL_PYTHON))" cmake --install $(BUILD) --prefix $(PREFIX)
 
 clean:
 	rm -rf $(BUILD) $(OUT)

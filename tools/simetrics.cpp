@@ -316,6 +316,9 @@ int main(int argc, char** argv) {
   } catch (const InputError& e) {
     std::cerr << "simetrics: " << e.what() << "\n";
     return kExitInput;
+  } catch (const std::invalid_argument& e) {  // the measures' refusal of an option's value
+    std::cerr << "simetrics: " << e.what() << "\n";
+    return kExitUsage;
   } catch (const std::bad_alloc&) {
     std::cerr << "simetrics: out of memory (the images, or --samples-per-pixel's points)\n";
     return 1;

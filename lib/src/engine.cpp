@@ -319,6 +319,7 @@ template <typename Whole, typename AddStrip>
 NonFiniteReport acquire_in_bands(const InputSet& in, const Reading& g, const BandPartition& bands,
                                  Whole& whole, LocalRange& local, int inner, bool stop,
                                  const std::function<void(double)>& progress,
+                                 const std::function<void()>& interrupt,
                                  const AddStrip& add_strip) {
   struct Worker {
     std::unique_ptr<typename Whole::Band> acquisition;
@@ -341,6 +342,7 @@ NonFiniteReport acquire_in_bands(const InputSet& in, const Reading& g, const Ban
     w[t]->range->begin(b);
   };
   cb.strip = [&](int t, const Strip& s) {
+    if (interrupt) interrupt();
     Worker& k = *w[t];
     const long y = s.global, rows = s.y1 - s.y0, y1 = y + rows;
     for (long r = 0; r < rows; ++r) k.bad[r] = 0, k.bad_first[r] = LONG_MAX;
@@ -404,7 +406,8 @@ struct SampleStages {
 NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop,
                                   const SampleStages& stages, Acquisition& acquisition,
                                   LocalRange& local, const BandPartition& bands,
-                                  const std::function<void(double)>& progress) {
+                                  const std::function<void(double)>& progress,
+                                  const std::function<void()>& interrupt) {
   const Reading g = plan_reading(in, threads, bands);
   const bool half = g.half;
   const std::size_t row_size = std::size_t(in.width) * in.channels;
@@ -420,7 +423,7 @@ NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop,
     });
   };
   return acquire_in_bands(in, g, bands, acquisition, local, g.workers > 1 ? 1 : threads, stop,
-                          progress, add_strip);
+                          progress, interrupt, add_strip);
 }
 
 // The hexagonal lattice: each strip through the stages (scanned row by
@@ -429,7 +432,8 @@ NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop,
 // reach takes their terms in band order).
 NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop,
                                   const SampleStages& stages, HexAcquisition& hexagonal,
-                                  LocalRange& local, const std::function<void(double)>& progress) {
+                                  LocalRange& local, const std::function<void(double)>& progress,
+                                  const std::function<void()>& interrupt) {
   const BandPartition& bands = hexagonal.bands();
   const Reading g = plan_reading(in, threads, bands);
   const bool half = g.half;
@@ -454,7 +458,8 @@ NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop,
     });
     acq.add_rows(y, y1, data);
   };
-  return acquire_in_bands(in, g, bands, hexagonal, local, inner, stop, progress, add_strip);
+  return acquire_in_bands(in, g, bands, hexagonal, local, inner, stop, progress, interrupt,
+                          add_strip);
 }
 
 }  // namespace
@@ -551,7 +556,7 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
     Acquisition cartesian(plan, threads);
     p.local_range = std::make_unique<LocalRange>(in.width, in.height, C, W, H, plan.bands().band_rows());
     bad = acquire_cartesian(in, threads, stop, stages, cartesian, *p.local_range, plan.bands(),
-                            rq.progress);
+                            rq.progress, rq.interrupt);
     if (!bad.count || !stop) k = cartesian.finish();
   } else {
     // The plan (the weights of every input row and column, some
@@ -563,7 +568,8 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
     HexAcquisition hexagonal(plan, threads);
     p.local_range =
         std::make_unique<LocalRange>(in.width, in.height, C, W, H, hexagonal.bands().band_rows());
-    bad = acquire_hexagonal(in, threads, stop, stages, hexagonal, *p.local_range, rq.progress);
+    bad = acquire_hexagonal(in, threads, stop, stages, hexagonal, *p.local_range, rq.progress,
+                            rq.interrupt);
     if (!bad.count || !stop) k = hexagonal.finish();
   }
   p.acquire_seconds = seconds_since(t);

@@ -44,6 +44,41 @@ void check_same_shape(const ImageView& a, const ImageView& b, const char* fn) {
                                 " against " + size_of(b));
 }
 
+// Every value of `a` finite: a NaN or an infinity would make a measure
+// meaningless (a NaN even scores as perfect, every comparison with it false).
+void check_finite(const ImageView& a, const char* fn, const char* what) {
+  const std::size_t n = std::size_t(a.width) * std::size_t(a.height) * std::size_t(a.channels);
+  for (std::size_t q = 0; q < n; ++q)
+    if (!std::isfinite(a.data[q])) {
+      const std::size_t p = q / std::size_t(a.channels);
+      std::ostringstream m;
+      m << fn << "(): non-finite value (NaN or Inf) in the " << what << " at x "
+        << p % std::size_t(a.width) << ", y " << p / std::size_t(a.width) << ", channel "
+        << q % std::size_t(a.channels);
+      throw std::invalid_argument(m.str());
+    }
+}
+
+// A number argument that must be finite (K, a peak...).
+void check_finite_number(double v, const char* fn, const char* what) {
+  if (!std::isfinite(v)) {
+    std::ostringstream m;
+    m << fn << "(): " << what << " " << v << " is not finite";
+    throw std::invalid_argument(m.str());
+  }
+}
+
+// The most points per output pixel and axis the closed-form error samples
+// (a million per pixel): beyond, the sample grid's sides overflow or the
+// error takes years.
+constexpr int kMaxSamplesPerPixel = 1024;
+
+void check_samples_per_pixel(int n) {
+  if (n < 1 || n > kMaxSamplesPerPixel)
+    throw std::invalid_argument("l2_error(): samples_per_pixel " + std::to_string(n) +
+                                ": expected 1 to " + std::to_string(kMaxSamplesPerPixel));
+}
+
 // Inclusive range [first, last] of the indices k in [0, n_in) whose sample
 // position (k + 1/2) n_out / n_in lies in [lo, hi); last < first when none.
 std::pair<long, long> samples_in(double lo, double hi, long n_in, long n_out) {
@@ -84,12 +119,16 @@ std::vector<std::pair<long, long>> axis_windows(long n_out, long n_in, double r)
 
 void check_coefficients(const Coefficients& k) {
   if (k.c.width < 1 || k.c.height < 1 || k.c.channels < 1 || !(k.image_width > 0) ||
-      !(k.image_height > 0)) {
+      !(k.image_height > 0) || !std::isfinite(k.image_width) || !std::isfinite(k.image_height)) {
     std::ostringstream m;
     m << "l2_error(): coefficients " << k.c.width << " x " << k.c.height << " x " << k.c.channels
       << " over an image of " << k.image_width << " x " << k.image_height << " are empty";
     throw std::invalid_argument(m.str());
   }
+  for (std::size_t q = 0; q < k.c.data.size(); ++q)
+    if (!std::isfinite(k.c.data[q]))
+      throw std::invalid_argument("l2_error(): non-finite coefficient (NaN or Inf) at index " +
+                                  std::to_string(q));
 }
 
 void check_border(double border) {
@@ -240,7 +279,12 @@ AcquiredReference acquire_reference(const SamplePlan& p, long cw, long ch, int C
 }
 
 double rms_of(double app_energy, double cross, double ref_energy, long count) {
-  return std::sqrt(std::max(0.0, app_energy - 2 * cross + ref_energy) / double(count));
+  const double sum = app_energy - 2 * cross + ref_energy;
+  // a truth function's NaN, or sums past double's range: never a score
+  if (!std::isfinite(sum))
+    throw std::invalid_argument("l2_error(): the error is not finite (a NaN or an infinity in "
+                                "the truth, or values past double's range)");
+  return std::sqrt(std::max(0.0, sum) / double(count));
 }
 
 // What identifies a Cartesian space's samples of the reference grid.
@@ -301,7 +345,7 @@ double l2_on_grid(const Coefficients& k, long ref_w, long ref_h, double border, 
     count += counts[j];
   }
   if (count == 0) nothing_inside(k, border);
-  return std::sqrt(sum / count);
+  return rms_of(sum, 0, 0, count);
 }
 
 
@@ -393,6 +437,8 @@ double highpass_energy_share(const ImageView& image, double cutoff_cycles_per_pi
 double rms_difference(const ImageView& a, const ImageView& b, long border) {
   check_same_shape(a, b, "rms_difference");
   check_not_empty(a, "rms_difference");
+  check_finite(a, "rms_difference", "first image");
+  check_finite(b, "rms_difference", "second image");
   if (border < 0 || 2 * border >= a.width || 2 * border >= a.height)
     throw std::invalid_argument("rms_difference(): border " + std::to_string(border) +
                                 " leaves no pixel of " + size_of(a));
@@ -430,6 +476,7 @@ struct L2Reference::Acquired {
 L2Reference::L2Reference(const ImageView& reference, double border_output_pixels, int threads)
     : reference_(reference), border_(border_output_pixels), threads_(threads) {
   check_not_empty(reference, "l2_error");
+  check_finite(reference, "l2_error", "reference");
   check_border(border_output_pixels);
 }
 
@@ -477,9 +524,7 @@ double l2_error(const Coefficients& coefficients,
                 const std::function<double(double x, double y, int channel)>& truth,
                 int samples_per_pixel, double border_output_pixels, int threads,
                 bool truth_on_any_thread) {
-  if (samples_per_pixel < 1)
-    throw std::invalid_argument("l2_error(): samples_per_pixel " +
-                                std::to_string(samples_per_pixel) + " < 1");
+  check_samples_per_pixel(samples_per_pixel);
   if (!truth) throw std::invalid_argument("l2_error(): no truth function");
   check_coefficients(coefficients);
   check_border(border_output_pixels);
@@ -511,6 +556,16 @@ OvershootReport overshoot(const ImageView& output, const ImageView& input,
     throw std::invalid_argument("overshoot(): neighbourhood " +
                                 std::to_string(options.neighbourhood) +
                                 " output pixels is not a finite value >= 0");
+  // Past the output's larger side every window holds the whole input
+  // already; far past it the windows' indices overflow.
+  const long widest = std::max(output.width, output.height);
+  if (options.neighbourhood > double(widest)) {
+    std::ostringstream m;
+    m << "overshoot(): neighbourhood " << options.neighbourhood << " output pixels: at most "
+      << widest << " (the output's larger side, where every pixel's neighbourhood holds the "
+      << "whole input)";
+    throw std::invalid_argument(m.str());
+  }
   if (!(options.tolerance >= 0) || !std::isfinite(options.tolerance))
     throw std::invalid_argument("overshoot(): tolerance " + std::to_string(options.tolerance) +
                                 " is not a finite value >= 0");
@@ -518,6 +573,8 @@ OvershootReport overshoot(const ImageView& output, const ImageView& input,
   if (B < 0 || 2 * B >= output.width || 2 * B >= output.height)
     throw std::invalid_argument("overshoot(): border " + std::to_string(B) +
                                 " leaves no pixel of " + size_of(output));
+  check_finite(output, "overshoot", "output");
+  check_finite(input, "overshoot", "input");
 
   const int C = output.channels;
   const long W = output.width, H = output.height;
@@ -572,9 +629,10 @@ OvershootReport overshoot(const ImageView& output, const ImageView& input,
 
 double zoneplate_l2_error(const Coefficients& coefficients, double K, int samples_per_pixel,
                           double border_output_pixels, int threads) {
-  if (samples_per_pixel < 1)
-    throw std::invalid_argument("l2_error(): samples_per_pixel " +
-                                std::to_string(samples_per_pixel) + " < 1");
+  check_samples_per_pixel(samples_per_pixel);
+  check_finite_number(K, "l2_error", "the zone plate's K");
+  check_coefficients(coefficients);
+  check_border(border_output_pixels);
   const double W = coefficients.image_width, H = coefficients.image_height;
   const long ref_w = std::max(1L, std::lround(W * samples_per_pixel));
   const long ref_h = std::max(1L, std::lround(H * samples_per_pixel));
@@ -596,8 +654,6 @@ double zoneplate_l2_error(const Coefficients& coefficients, double K, int sample
   if (space_of(k) != SpaceKind::Cartesian)
     return l2_on_grid(k, ref_w, ref_h, border_output_pixels, threads, true,
                       [&](long i, long j, int) { return 0.5 + 0.5 * (cx[i] * cy[j] - sx_[i] * sy_[j]); });
-  check_coefficients(k);
-  check_border(border_output_pixels);
   // f = 1/2 + 1/2 (cx cy - sx sy): a = Wy' F Wx is three outer products of
   // per-axis acquisitions, and sum f^2 = N/4 + (1/2) sum cos + (1/4) sum cos^2
   // of per-axis sums.

@@ -1,11 +1,14 @@
 #include "sis/parallel.h"
 
+#include <pthread.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <exception>
 #include <mutex>
+#include <new>
 #include <thread>
 #include <vector>
 
@@ -38,11 +41,19 @@ thread_local bool in_part = false;
 // time; a call made while another runs (nested, or from a second thread)
 // runs its chunks in the caller instead, which gives the same result. The
 // mutex guards the job; the atomics only let waiters poll without it.
+// A child made by fork() has none of the parent's workers: it starts with
+// an empty pool (after_fork), which makes workers again as it needs them.
 class WorkerPool {
  public:
   static WorkerPool& instance() {
     static WorkerPool pool;
     return pool;
+  }
+
+  WorkerPool() {
+    static const int registered = pthread_atfork(nullptr, nullptr, [] { instance().after_fork(); });
+    (void)registered;
+    keep_fork_safe();
   }
 
   // Runs part(k) for k in [0, parts) on the caller and parts - 1 workers.
@@ -87,6 +98,26 @@ class WorkerPool {
   }
 
  private:
+  // In the child of a fork, whose only thread is the one that forked: the
+  // parent's workers are not there to join, and a lock or a job they held
+  // at the fork is held by no one. Their thread objects are let go
+  // unjoined (left allocated: destroying a joinable std::thread ends the
+  // process), the locks and the job made anew.
+  void after_fork() {
+    new std::vector<std::thread>(std::move(workers_));
+    workers_.clear();
+    new (&call_) std::mutex;
+    new (&m_) std::mutex;
+    new (&wake_) std::condition_variable;
+    new (&done_) std::condition_variable;
+    part_ = nullptr;
+    errors_ = nullptr;
+    parts_ = next_ = 0;
+    pending_.store(0);
+    stop_ = false;
+    in_part = false;
+  }
+
   // Takes parts until none is left.
   void drain() {
     std::unique_lock<std::mutex> lock(m_);

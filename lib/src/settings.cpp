@@ -233,6 +233,7 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
     rq.coefficient_file = fr.coefficient_file;
     rq.float_coefficients = fr.float_coefficients;
     rq.progress = fr.progress;
+    rq.interrupt = fr.interrupt;
     Projection p = project(rq, std::move(set));
     f.replaced = p.nonfinite;
     if (p.nonfinite.count)
@@ -248,6 +249,7 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
   }
   f.display = r.display ? *r.display : (k.min_error ? Display::antialiased_2x2() : Display::centred());
   if (!fr.final_image) return f;
+  if (fr.interrupt) fr.interrupt();
   const auto t = Clock::now();
   f.final = final_image(k, f.display, f.width, f.height, f.highlight_compressed, r.clamp,
                         f.local_range.get(), threads, f.inputs.label, f.inputs.channel_names,

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <mutex>
+#include <vector>
 
 #include "sis/imageio.h"
 
@@ -197,6 +198,41 @@ void remove_staged_files_on_signals() {
   for (int sig : kFatalSignals) install(sig);
   struct sigaction old;
   if (sigaction(SIGXFSZ, nullptr, &old) == 0 && old.sa_handler == SIG_DFL) ::signal(SIGXFSZ, SIG_IGN);
+}
+
+namespace {
+// The scopes' shared install: how many live, and the actions they replaced.
+std::mutex scopes_mutex;
+int scopes = 0;
+struct Replaced {
+  int sig;
+  struct sigaction old;
+};
+std::vector<Replaced> replaced;
+}  // namespace
+
+StagedFileSignals::StagedFileSignals() {
+  std::lock_guard<std::mutex> lock(scopes_mutex);
+  if (scopes++ > 0) return;
+  for (int sig : kCleanupSignals) {
+    struct sigaction old;
+    if (sigaction(sig, nullptr, &old) != 0 || (old.sa_flags & SA_SIGINFO) ||
+        old.sa_handler != SIG_DFL)
+      continue;
+    struct sigaction sa;
+    std::memset(&sa, 0, sizeof sa);
+    sa.sa_handler = remove_and_reraise;
+    sigemptyset(&sa.sa_mask);
+    for (int s : kCleanupSignals) sigaddset(&sa.sa_mask, s);
+    if (sigaction(sig, &sa, nullptr) == 0) replaced.push_back({sig, old});
+  }
+}
+
+StagedFileSignals::~StagedFileSignals() {
+  std::lock_guard<std::mutex> lock(scopes_mutex);
+  if (--scopes > 0) return;
+  for (const Replaced& r : replaced) sigaction(r.sig, &r.old, nullptr);
+  replaced.clear();
 }
 
 }  // namespace sis

@@ -4,11 +4,12 @@
 # make install's result (ctest label e2e), in an empty temporary prefix:
 # cmake --install puts siproject and simetrics in PREFIX/bin (--version
 # names the version and the git revision), the library, its headers and a
-# CMake package under PREFIX, and the Python module in PREFIX's
-# site-packages; the example program of docs/api.md (its CMakeLists.txt and
-# consumer.cpp taken from the page's marked code blocks, so that the page
-# cannot drift) finds the package, builds against it and runs (the ramp's
-# middle is 0.5); the module imports
+# CMake package under PREFIX, and the Python module where the interpreter
+# looks under PREFIX (or, where it does not, PREFIX's site-packages and a
+# note of how to use it); the example program of docs/api.md (its
+# CMakeLists.txt and consumer.cpp taken from the page's marked code blocks,
+# so that the page cannot drift) finds the package, builds against it and
+# runs (the ramp's middle is 0.5); the module imports
 # from the prefix and projects; the installed siproject projects a file.
 set -euo pipefail
 [ $# -eq 3 ] || { echo "usage: ${0##*/} SOURCE_DIR BUILD_DIR PYTHON" >&2; exit 64; }
@@ -45,9 +46,29 @@ cmake -S "$tmp/consumer-src" -B "$tmp/consumer" -DCMAKE_PREFIX_PATH="$prefix" > 
 middle=$("$tmp/consumer/consumer")
 [ "$middle" = "0.500000" ] || fail "the consumer printed $middle, not 0.500000"
 
-# the Python module from the prefix
+# the Python module from the prefix, where the build's interpreter (a venv)
+# does not look: PREFIX/lib/pythonX.Y/site-packages, and said so
 site=$(find "$prefix/lib" -maxdepth 3 -type d -name site-packages | head -1)
 [ -n "$site" ] && [ -f "$site/siproject/__init__.py" ] || fail "no siproject package in PREFIX's site-packages"
+grep -qF "The Python module siproject: $site/siproject; $python does not look there: PYTHONPATH=$site" \
+  "$tmp/install.log" || { cat "$tmp/install.log" >&2; fail "no note of where the module went"; }
+# where the interpreter looks under PREFIX: a venv's site-packages, and
+# Debian's python3 under /usr/local (lib/python3.X/dist-packages: staged in
+# DESTDIR)
+"$python" -m venv --without-pip "$tmp/venv"
+SIS_INSTALL_PYTHON=$tmp/venv/bin/python cmake --install "$build" --prefix "$tmp/venv" --component python \
+  > "$tmp/venv.log" || fail "cmake --install into a venv"
+venv_site=$("$tmp/venv/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["platlib"])')
+[ -f "$venv_site/siproject/__init__.py" ] && ls "$venv_site"/siproject/_core*.so > /dev/null ||
+  fail "the module is not in the venv's $venv_site"
+grep -qF "$venv_site/siproject ($tmp/venv/bin/python imports it)" "$tmp/venv.log" || fail "$(cat "$tmp/venv.log")"
+if [ -x /usr/bin/python3 ] && /usr/bin/python3 -c 'import sys, site; sys.exit("/usr/local/lib/python%d.%d/dist-packages" % sys.version_info[:2] not in site.getsitepackages())'; then
+  deb_site=$(/usr/bin/python3 -c 'import sys; print("/usr/local/lib/python%d.%d/dist-packages" % sys.version_info[:2])')
+  DESTDIR=$tmp/root SIS_INSTALL_PYTHON=/usr/bin/python3 cmake --install "$build" --prefix /usr/local \
+    --component python > "$tmp/deb.log" || fail "cmake --install for /usr/bin/python3"
+  [ -f "$tmp/root$deb_site/siproject/__init__.py" ] || fail "not in $deb_site: $(cat "$tmp/deb.log")"
+  grep -qF "$deb_site/siproject (/usr/bin/python3 imports it)" "$tmp/deb.log" || fail "$(cat "$tmp/deb.log")"
+fi
 PYTHONPATH=$site "$python" -c "
 import numpy as np, siproject, sys
 assert siproject.__file__.startswith(sys.argv[1]), siproject.__file__

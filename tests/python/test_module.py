@@ -87,9 +87,18 @@ def test_size_factor_and_threads(files, tmp_path):
 
 
 def test_grey_array_of_two_dimensions():
+    """A 2-D array gives a 2-D result, the samples of the (H, W, 1) one's,
+    which stays 3-D; so do resample() and srgb8()."""
     grey = scene(c=1)[:, :, 0]
-    assert np.array_equal(siproject.project(grey, factor=2),
-                          siproject.project(grey[:, :, np.newaxis], factor=2))
+    flat = siproject.project(grey, factor=2)
+    deep = siproject.project(grey[:, :, np.newaxis], factor=2)
+    assert flat.shape == (40, 48) and deep.shape == (40, 48, 1)
+    assert np.array_equal(flat, deep[:, :, 0])
+    k = siproject.coefficients(grey, factor=2)
+    assert k.resample().shape == (40, 48) and np.array_equal(k.resample(), flat)
+    assert siproject.coefficients(grey[:, :, np.newaxis], factor=2).resample().shape == (40, 48, 1)
+    assert siproject.srgb8(flat).shape == (40, 48)
+    assert np.array_equal(siproject.srgb8(flat), siproject.srgb8(deep)[:, :, 0])
 
 
 def test_coefficients_resample_evaluate_save_load(files, tmp_path):

@@ -6,20 +6,27 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <atomic>
+#include <chrono>
+#include <climits>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <memory>
 #include <new>
 #include <mutex>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "sis/engine.h"
 #include "sis/metrics.h"
+#include "sis/parallel.h"
 #include "sis/settings.h"
 #include "sis/space.h"
+#include "sis/staged_file.h"
 
 namespace py = pybind11;
 using namespace sis;
@@ -57,6 +64,72 @@ auto translated(bool array_input, F&& f) -> decltype(f()) {
   }
   PyErr_SetString(raised->type, raised->message.c_str());
   throw py::error_already_set();
+}
+
+// Ctrl-C while the engine works: the engine calls poll() at every strip it
+// reads, from its threads. On the thread that called (the one where Python
+// runs signal handlers), at most every kPollEvery, poll() takes the GIL
+// and runs the handlers of signals that arrived (PyErr_CheckSignals). An
+// exception from one (KeyboardInterrupt) is kept and poll() throws
+// Interrupted on every thread from then on, which abandons the projection;
+// the caller raises the kept exception once the engine has let go.
+struct Interrupted : std::exception {
+  const char* what() const noexcept override { return "interrupted"; }
+};
+
+class SignalPoll {
+ public:
+  SignalPoll() : caller_(std::this_thread::get_id()) {}
+  SignalPoll(const SignalPoll&) = delete;
+  SignalPoll& operator=(const SignalPoll&) = delete;
+  ~SignalPoll() {
+    if (type_ || value_ || trace_) {
+      py::gil_scoped_acquire gil;
+      Py_XDECREF(type_);
+      Py_XDECREF(value_);
+      Py_XDECREF(trace_);
+    }
+  }
+
+  std::function<void()> hook() {
+    return [this] { poll(); };
+  }
+  bool raised() const { return raised_.load(); }
+  // With the GIL held, after the engine let go: the kept exception set
+  // again as Python's error, raised by the throw.
+  [[noreturn]] void raise() {
+    PyErr_Restore(type_, value_, trace_);
+    type_ = value_ = trace_ = nullptr;
+    throw py::error_already_set();
+  }
+
+ private:
+  static constexpr auto kPollEvery = std::chrono::milliseconds(20);
+  void poll() {
+    if (raised_.load()) throw Interrupted();
+    if (std::this_thread::get_id() != caller_) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now < next_) return;
+    next_ = now + kPollEvery;
+    py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() == 0) return;
+    PyErr_Fetch(&type_, &value_, &trace_);
+    raised_.store(true);
+    throw Interrupted();
+  }
+
+  std::thread::id caller_;
+  std::chrono::steady_clock::time_point next_{};
+  std::atomic<bool> raised_{false};
+  PyObject *type_ = nullptr, *value_ = nullptr, *trace_ = nullptr;
+};
+
+// An array's channel count (the library's views hold int).
+int channel_count(py::ssize_t c, const std::string& what) {
+  if (c > INT_MAX)
+    throw py::value_error(what + ": " + std::to_string(c) + " channels: at most " +
+                          std::to_string(INT_MAX));
+  return int(c);
 }
 
 // A float32 array of shape (H, W, C) that owns the image's samples (moved,
@@ -103,7 +176,8 @@ py::tuple run_form(py::object input, const Settings& s, bool coefficients_only) 
         !(half || (array.dtype().kind() == 'f' && array.itemsize() == 4)))
       throw std::logic_error("run_form(): the array is not C-contiguous float32 or float16 (H, W, C)");
     inputs.push_back(ProjectionInput::memory(
-        SampleView(array.data(), long(array.shape(1)), long(array.shape(0)), int(array.shape(2)), half),
+        SampleView(array.data(), long(array.shape(1)), long(array.shape(0)),
+                   channel_count(array.shape(2), "array"), half),
         "array"));
   } else {
     path = py::str(input);
@@ -114,10 +188,16 @@ py::tuple run_form(py::object input, const Settings& s, bool coefficients_only) 
     FormRequest fr;
     fr.keep_coefficients = coefficients_only;
     fr.final_image = !coefficients_only;
+    SignalPoll signals;
+    fr.interrupt = signals.hook();
     Formed f;
-    {
+    try {
       py::gil_scoped_release free;
       f = form(s, r, inspect(inputs), fr);
+    } catch (...) {
+      // whatever the abandoned engine threw (a band given up), the interruption
+      if (signals.raised()) signals.raise();
+      throw;
     }
     py::list warnings;
     for (const std::string& w : f.warnings) warnings.append(w);
@@ -220,9 +300,20 @@ py::array_t<double> evaluate_at(const PyCoefficients& c, py::array_t<double, py:
   if (x.size() != y.size()) throw py::value_error("evaluate(): x and y differ in size");
   const py::ssize_t n = x.size();
   const int C = c.k.c.channels;
-  py::array_t<double> out({n, py::ssize_t(C)});
   const double* px = x.data();
   const double* py_ = y.data();
+  // A NaN or a point far beyond any frame would overflow the lattice's
+  // indices; the approximation is defined (extended by the boundary rule)
+  // out to the largest output side.
+  for (const auto& [v, name] : {std::pair{px, "x"}, std::pair{py_, "y"}})
+    for (py::ssize_t i = 0; i < n; ++i)
+      if (!(std::abs(v[i]) <= double(kMaxOutputSide))) {
+        std::ostringstream m;
+        m << "evaluate(): " << name << " " << v[i] << " (point " << i
+          << "): expected a finite coordinate within +-" << kMaxOutputSide << " output pixels";
+        throw py::value_error(m.str());
+      }
+  py::array_t<double> out({n, py::ssize_t(C)});
   double* o = out.mutable_data();
   {
     py::gil_scoped_release free;
@@ -238,6 +329,7 @@ py::array_t<double> evaluate_at(const PyCoefficients& c, py::array_t<double, py:
 void save_to(const PyCoefficients& c, const std::string& path) {
   translated(false, [&] {
     check_output(path);
+    StagedFileSignals cleanup;  // SIGTERM, SIGHUP... remove the staged file
     if (is_8bit_format(path)) throw RequestError("--coeffs " + path + ": coefficient files are float EXR");
     stage_coefficients(path, c.k, c.channel_names,
                        {{"sis:input", c.label},
@@ -261,7 +353,7 @@ py::array_t<double> grid_array(const PyCoefficients& c) {
 using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
 ImageView view_of(const FloatArray& a, const char* what) {
   if (a.ndim() != 3) throw py::value_error(std::string(what) + ": expected an array (H, W, C)");
-  return ImageView(a.data(), long(a.shape(1)), long(a.shape(0)), int(a.shape(2)));
+  return ImageView(a.data(), long(a.shape(1)), long(a.shape(0)), channel_count(a.shape(2), what));
 }
 
 // A reference prepared for many L2 errors: the pixels it reads (the
@@ -285,7 +377,9 @@ Image image_of(const FloatArray& a, const char* what) {
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
+  keep_fork_safe();  // a child of os.fork() projects again and exits
   m.doc() = "The engine of siproject (see the siproject package for the documented API).";
+  m.attr("__version__") = SIS_PYTHON_VERSION;  // the project's (CMakeLists.txt)
   py::class_<PyCoefficients>(m, "Coefficients")
       .def_property_readonly("lattice", [](const PyCoefficients& c) { return space_name(space_of(c.k)); })
       .def_property_readonly("generator", [](const PyCoefficients& c) { return generator_name(c.k); })
@@ -302,7 +396,12 @@ PYBIND11_MODULE(_core, m) {
       .def("_evaluate", &evaluate_at)
       .def("_resample", &resample_to)
       .def("_save", &save_to);
-  m.def("_form", &form_with);
+  // The keywords by name (siproject/__init__.py checks their types first).
+  m.def("_form", &form_with, py::arg("input"), py::kw_only(), py::arg("size"), py::arg("factor"),
+        py::arg("factor_spelling"), py::arg("generator"), py::arg("method"), py::arg("display"),
+        py::arg("boundary"), py::arg("lattice"), py::arg("density"), py::arg("density_spelling"),
+        py::arg("nonfinite"), py::arg("prefilter"), py::arg("clamp"),
+        py::arg("highlight_compress"), py::arg("threads"), py::arg("coefficients_only"));
   m.def("_load", &load_file);
   m.def("_highpass_shares", [](FloatArray a, std::vector<double> cutoffs) {
     const ImageView im = view_of(a, "highpass_share()");
@@ -385,15 +484,25 @@ PYBIND11_MODULE(_core, m) {
       return to_array(std::move(im));
     });
   });
+  // Returns the samples clamped to half's range.
   m.def("_write_image", [](const std::string& path, FloatArray a,
                            std::vector<std::string> channel_names, int alpha, bool half) {
     Image im = image_of(a, "write_image()");
-    translated(true, [&] {
+    return translated(true, [&] {
       check_output(path);
       py::gil_scoped_release free;
+      // As siproject -d half: magnitudes past half's largest value clamped
+      // there (a half file would hold infinities), and counted.
+      long clamped = 0;
+      if (half && !is_8bit_format(path)) {
+        constexpr float kHalfMax = 65504.0f;
+        for (float& v : im.data)
+          if (std::abs(v) > kHalfMax) v = std::copysign(kHalfMax, v), ++clamped;
+      }
+      StagedFileSignals cleanup;  // SIGTERM, SIGHUP... remove the staged file
       write_image(path, im, channel_names, {{"Software", "siproject (Python)"}}, alpha,
                   half ? SampleFormat::Half : SampleFormat::Float);
-      return 0;
+      return clamped;
     });
   });
   m.def("_srgb8", [](FloatArray a) {

@@ -106,6 +106,10 @@ struct ProjectionRequest {
   // double (the prefilter's own precision).
   bool float_coefficients = true;
   std::function<void(double)> progress;  // fraction of the input read, from the worker threads
+  // Called at every strip read, from the reading threads (the caller's
+  // among them): an exception it throws abandons the projection and comes
+  // out of project() (a front end's cancellation: Ctrl-C in Python).
+  std::function<void()> interrupt;
 };
 
 struct NonFiniteReport {

@@ -11,4 +11,11 @@ namespace sis {
 // gives the same bits.
 void parallel_for(long n, int threads, const std::function<void(long, long)>& fn);
 
+// Lets a child of fork() use the library again and exit: registers (once)
+// the handlers that make the worker pool anew in the child and stop the
+// thread pools of the library's dependencies (OpenEXR's, log4cplus's)
+// before a fork. Called by the first parallel_for and by the Python module
+// at import; a program that forks after using OpenImageIO otherwise calls it.
+void keep_fork_safe();
+
 }  // namespace sis

@@ -79,6 +79,7 @@ struct FormRequest {
   bool float_coefficients = true;   // as a coefficient file keeps them
   bool final_image = true;          // false: stop after the coefficients
   std::function<void(double)> progress;
+  std::function<void()> interrupt;  // ProjectionRequest::interrupt; also called before resampling
 };
 
 struct Formed {

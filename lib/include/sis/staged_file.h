@@ -50,4 +50,18 @@ class StagedFile {
 // programs (the tools); a library user keeps its own handlers.
 void remove_staged_files_on_signals();
 
+// While one lives (several at once, on any threads, share one install):
+// the handlers of remove_staged_files_on_signals() on those of its signals
+// whose action is the default one, which would end the process and leave
+// the staged files; their former actions are put back when the last one
+// ends. For a library user with handlers of its own around its writes (the
+// Python module): a signal it handles or ignores is left to it.
+class StagedFileSignals {
+ public:
+  StagedFileSignals();
+  ~StagedFileSignals();
+  StagedFileSignals(const StagedFileSignals&) = delete;
+  StagedFileSignals& operator=(const StagedFileSignals&) = delete;
+};
+
 }  // namespace sis

@@ -12,7 +12,9 @@ Arrays are (height, width, channels), rows top to bottom, as in the file.
 
 Every keyword means what siproject's option of the same name means
 (``siproject --help``), with the same defaults and messages. Errors raise
-ValueError (a bad option or array), OSError (a file) or RuntimeError.
+TypeError (a keyword given a value of the wrong type), ValueError (a bad
+option or array), OSError (a file) or RuntimeError; Ctrl-C during a
+projection raises KeyboardInterrupt at once.
 
 Example::
 
@@ -25,6 +27,7 @@ Example::
 
 from __future__ import annotations
 
+import numbers
 import os
 import warnings as _warnings
 from typing import Optional, Sequence, Tuple, Union
@@ -32,6 +35,8 @@ from typing import Optional, Sequence, Tuple, Union
 import numpy as np
 
 from . import _core
+
+__version__ = _core.__version__
 
 __all__ = [
     "project",
@@ -50,34 +55,131 @@ __all__ = [
     "write_image",
 ]
 
+
+def __dir__():
+    return sorted(__all__ + ["__version__"])
+
+
 Size = Union[int, Tuple[int, int], str]
 Input = Union[str, "os.PathLike[str]", np.ndarray]
 
+# ---- keywords: each checked for its type here (a TypeError of one line
+# naming the keyword and what it takes), its value by the engine (siproject's
+# ValueError messages).
 
-def _size(size: Optional[Size]) -> str:
+# What the string keywords take, for the messages.
+_TAKES = {
+    "generator": '"box", "tent", "quadratic", "cubic", "bspline:N", "mitchell", "gaussian", '
+                 '"catmull-rom", "lanczos3", "hex-hat" or "hex-quartic"',
+    "method": '"min-error" or "conventional"',
+    "display": '"centred", "2x2", "pixel" or "offsets:DX,DY;..."',
+    "boundary": '"mirror" or "periodic"',
+    "lattice": '"cartesian" or "hex"',
+    "nonfinite": '"error" or "zero"',
+    "prefilter": '"fft" or "recursive"',
+    "clamp": '"none", "zero" or "local"',
+}
+_INT_RANGE = (-2 ** 31, 2 ** 31 - 1)  # the engine's int
+_LONG_RANGE = (-2 ** 63, 2 ** 63 - 1)
+
+
+def _shown(value) -> str:
+    """A value as a message shows it: its repr, or its type where that is long."""
+    r = repr(value)
+    if len(r) <= 40:
+        return r
+    shape = getattr(value, "shape", None)
+    return f"<{type(value).__name__}{f' of shape {shape}' if shape is not None else ''}>"
+
+
+def _wrong(name: str, value, takes: str):
+    return TypeError(f"{name}={_shown(value)}: expected {takes}, not {type(value).__name__}")
+
+
+def _is_bool(value) -> bool:
+    return isinstance(value, (bool, np.bool_))
+
+
+def _text(name: str, value, optional: bool = False):
+    """A string keyword (None too where optional)."""
+    if value is None and optional:
+        return None
+    if not isinstance(value, str):
+        raise _wrong(name, value, _TAKES[name] + (" or None" if optional else ""))
+    return value
+
+
+def _flag(name: str, value) -> bool:
+    if not _is_bool(value):
+        raise _wrong(name, value, "True or False")
+    return bool(value)
+
+
+def _whole(name: str, value, limits=_INT_RANGE) -> int:
+    """A whole number (not a bool), within the C type the engine takes."""
+    if _is_bool(value) or not isinstance(value, numbers.Integral):
+        raise _wrong(name, value, "a whole number (int)")
+    v = int(value)
+    if not limits[0] <= v <= limits[1]:
+        raise ValueError(f"{name}={v}: out of range ({limits[0]} to {limits[1]})")
+    return v
+
+
+def _number(name: str, value, optional: bool = False) -> Optional[float]:
+    """A real number (not a bool); None too where optional."""
+    if value is None and optional:
+        return None
+    if _is_bool(value) or not isinstance(value, numbers.Real):
+        raise _wrong(name, value, "a number" + (" or None" if optional else ""))
+    return float(value)
+
+
+def _pair(name: str, value, what: str) -> Tuple[int, int]:
+    """Two whole numbers (a tuple, list or array of two)."""
+    try:
+        a, b = value
+    except (TypeError, ValueError):
+        raise _wrong(name, value, what) from None
+    if any(_is_bool(v) or not isinstance(v, numbers.Integral) for v in (a, b)):
+        raise _wrong(name, value, what + " of whole numbers")
+    return int(a), int(b)
+
+
+def _size(size: Optional[Size], output_shape=None, factor=None) -> str:
+    """size (N, (width, height) or "WxH") or output_shape ((rows, cols), as
+    scikit-image names it) as siproject's --size, "" for neither."""
+    if output_shape is not None:
+        if size is not None:
+            raise ValueError("give size=(width, height) or output_shape=(rows, cols), not both")
+        if factor is not None:
+            raise ValueError("give factor or output_shape, not both")
+        rows, cols = _pair("output_shape", output_shape, "(rows, cols)")
+        return f"{cols}x{rows}"
     if size is None:
         return ""
     if isinstance(size, str):
         return size
-    if isinstance(size, (int, np.integer)):
+    what = 'N, (width, height) or "WxH"'
+    if _is_bool(size):
+        raise _wrong("size", size, what)
+    if isinstance(size, numbers.Integral):
         return f"{int(size)}x{int(size)}"
-    try:
-        w, h = size
-    except (TypeError, ValueError):
-        raise ValueError(f"--size {size!r}: expected N, (W, H) or 'WxH'") from None
-    return f"{int(w)}x{int(h)}"
+    w, h = _pair("size", size, what)
+    return f"{w}x{h}"
 
 
 def _samples(input: Input):
     """A path as a str, an array as C-contiguous float32 or float16 (H, W, C)."""
     if isinstance(input, (str, os.PathLike)):
-        return os.fspath(input)
+        return _path("input", input)
     a = np.asarray(input)
     if a.ndim == 2:
         a = a[:, :, np.newaxis]
     if a.ndim != 3:
         raise ValueError(f"array: expected (height, width) or (height, width, channels), "
                          f"not shape {a.shape}")
+    if a.shape[2] > _INT_RANGE[1]:  # before any copy
+        raise ValueError(f"array: {a.shape[2]} channels: at most {_INT_RANGE[1]}")
     if a.dtype not in (np.float32, np.float16):
         if not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)):
             raise ValueError(f"array: samples of type {a.dtype} (expected float32 or float16)")
@@ -85,21 +187,44 @@ def _samples(input: Input):
     return np.ascontiguousarray(a)
 
 
-def _form(input, size, factor, generator, method, display, boundary, lattice, density,
-          nonfinite, prefilter, clamp, highlight_compress, threads, coefficients_only):
+def _threads(threads) -> int:
+    return _whole("threads", threads)
+
+
+def _grey(input) -> bool:
+    """An array of two dimensions: the result has two as well."""
+    return not isinstance(input, (str, os.PathLike)) and np.ndim(input) == 2
+
+
+def _form(input, coefficients_only, *, size, output_shape, factor, generator, method, display,
+          boundary, lattice, density, nonfinite, prefilter, clamp, highlight_compress, threads):
+    factor_spelling = "" if factor is None else str(factor)  # as given, for messages
+    density_spelling = "" if density is None else str(density)
+    factor = _number("factor", factor, optional=True)
+    density = _number("density", density, optional=True)
     result = _core._form(
-        _samples(input), _size(size),
-        None if factor is None else float(factor), "" if factor is None else str(factor),
-        generator, method, display or "", boundary, lattice,
-        None if density is None else float(density), "" if density is None else str(density),
-        nonfinite, prefilter, clamp, bool(highlight_compress), int(threads),
-        coefficients_only)
+        _samples(input),
+        size=_size(size, output_shape, factor),
+        factor=factor, factor_spelling=factor_spelling,
+        generator=_text("generator", generator, optional=True),
+        method=_text("method", method, optional=True),
+        display=_text("display", display, optional=True) or "",
+        boundary=_text("boundary", boundary),
+        lattice=_text("lattice", lattice),
+        density=density, density_spelling=density_spelling,
+        nonfinite=_text("nonfinite", nonfinite),
+        prefilter=_text("prefilter", prefilter),
+        clamp=_text("clamp", clamp),
+        highlight_compress=_flag("highlight_compress", highlight_compress),
+        threads=_threads(threads),
+        coefficients_only=coefficients_only)
     for w in result[2]:
         _warnings.warn(w, RuntimeWarning, stacklevel=3)
     return result
 
 
-def project(input: Input, *, size: Optional[Size] = None, factor: Optional[float] = None,
+def project(input: Input, *, size: Optional[Size] = None,
+            output_shape: Optional[Tuple[int, int]] = None, factor: Optional[float] = None,
             generator: Optional[str] = None, method: Optional[str] = None,
             display: Optional[str] = None, boundary: str = "mirror",
             lattice: str = "cartesian", density: Optional[float] = None,
@@ -113,7 +238,9 @@ def project(input: Input, *, size: Optional[Size] = None, factor: Optional[float
         array of samples (height, width[, channels]); float32 C-contiguous
         arrays are read where they are, float16 too, other types converted
         to float32 first.
-    size: output size N, (W, H) or "WxH"; or factor: output = input / factor.
+    size: output size N, (width, height) or "WxH" (siproject's --size); or
+        output_shape: (rows, cols), as scikit-image's output_shape and
+        a.shape[:2] spell it; or factor: output = input / factor.
     generator: box, tent, quadratic, cubic, bspline:N, mitchell, gaussian,
         catmull-rom, lanczos3; hex-hat or hex-quartic with lattice="hex".
         None: cubic (hex-quartic on the hexagonal lattice).
@@ -131,15 +258,19 @@ def project(input: Input, *, size: Optional[Size] = None, factor: Optional[float
     threads: worker threads, 0 for every core; the result is the same for any.
 
     Returns a float32 array (height, width, channels): the linear result
-    siproject writes to a float EXR, bit for bit.
+    siproject writes to a float EXR, bit for bit; (height, width) for an
+    array of two dimensions.
     """
-    image, _, _ = _form(input, size, factor, generator, method, display, boundary, lattice,
-                        density, nonfinite, prefilter, clamp, highlight_compress,
-                        threads, False)
-    return image
+    image, _, _ = _form(input, False, size=size, output_shape=output_shape, factor=factor,
+                        generator=generator, method=method, display=display,
+                        boundary=boundary, lattice=lattice, density=density,
+                        nonfinite=nonfinite, prefilter=prefilter, clamp=clamp,
+                        highlight_compress=highlight_compress, threads=threads)
+    return image[:, :, 0] if _grey(input) else image
 
 
-def coefficients(input: Input, *, size: Optional[Size] = None, factor: Optional[float] = None,
+def coefficients(input: Input, *, size: Optional[Size] = None,
+                 output_shape: Optional[Tuple[int, int]] = None, factor: Optional[float] = None,
                  generator: Optional[str] = None, method: Optional[str] = None,
                  boundary: str = "mirror", lattice: str = "cartesian",
                  density: Optional[float] = None,
@@ -150,19 +281,33 @@ def coefficients(input: Input, *, size: Optional[Size] = None, factor: Optional[
     The keywords are project()'s (there is no display or clamp: those apply
     when the coefficients are resampled). The coefficients are kept in float,
     as a coefficient file stores them, so that resample() gives project()'s
-    image exactly.
+    image exactly (of two dimensions for an array of two).
     """
-    _, k, _ = _form(input, size, factor, generator, method, None, boundary, lattice, density,
-                    nonfinite, prefilter, "none", highlight_compress, threads, True)
-    return Coefficients(k)
+    _, k, _ = _form(input, True, size=size, output_shape=output_shape, factor=factor,
+                    generator=generator, method=method, display=None, boundary=boundary,
+                    lattice=lattice, density=density, nonfinite=nonfinite,
+                    prefilter=prefilter, clamp="none", highlight_compress=highlight_compress,
+                    threads=threads)
+    return Coefficients(k, grey=_grey(input))
 
 
 def load(path: Union[str, "os.PathLike[str]"], *, nonfinite: str = "error",
          threads: int = 0) -> "Coefficients":
     """A coefficient file (siproject --coeffs, or Coefficients.save)."""
-    if nonfinite not in ("error", "zero"):
+    if _text("nonfinite", nonfinite) not in ("error", "zero"):
         raise ValueError(f"--nonfinite '{nonfinite}': expected error or zero")
-    return Coefficients(_core._load(os.fspath(path), nonfinite == "zero", int(threads)))
+    return Coefficients(_core._load(_path("path", path), nonfinite == "zero", _threads(threads)))
+
+
+def _path(name: str, path) -> str:
+    if not isinstance(path, (str, os.PathLike)):
+        raise _wrong(name, path, "a path (str or os.PathLike)")
+    p = os.fspath(path)
+    if not isinstance(p, str):
+        raise _wrong(name, path, "a path (str or os.PathLike of str)")
+    if "\0" in p:  # the engine's C strings would end there: another file
+        raise ValueError(f"{name} {p!r}: embedded null character")
+    return p
 
 
 class Coefficients:
@@ -173,8 +318,9 @@ class Coefficients:
     coefficient grid, (rows, columns, channels) float64, a copy) describe it.
     """
 
-    def __init__(self, core: "_core.Coefficients"):
+    def __init__(self, core: "_core.Coefficients", *, grey: bool = False):
         self._k = core
+        self._grey = grey  # from an array of two dimensions: resample() gives two
 
     lattice = property(lambda self: self._k.lattice)
     generator = property(lambda self: self._k.generator)
@@ -200,13 +346,16 @@ class Coefficients:
         return out.reshape(bx.shape + (out.shape[1],))
 
     def resample(self, size: Optional[Size] = None, display: Optional[str] = None,
-                 clamp: str = "none") -> np.ndarray:
-        """The final image at size (None: the frame's), sampled by display
-        (None: 2x2 for min-error, centred for conventional), as float32
-        (height, width, channels)."""
+                 clamp: str = "none", *,
+                 output_shape: Optional[Tuple[int, int]] = None) -> np.ndarray:
+        """The final image at size ((width, height), or output_shape (rows,
+        cols); None: the frame's), sampled by display (None: 2x2 for
+        min-error, centred for conventional), as float32 (height, width,
+        channels), or (height, width) for coefficients of an array of two
+        dimensions."""
         w = h = 0
-        if size is not None:
-            spelled = _size(size)
+        if size is not None or output_shape is not None:
+            spelled = _size(size, output_shape)
             try:
                 w, h = (int(v) for v in spelled.lower().split("x"))
             except ValueError:
@@ -215,12 +364,14 @@ class Coefficients:
             if w < 1 or h < 1:
                 raise ValueError(f"--size '{spelled}': expected WxH with positive whole numbers, "
                                  f"e.g. 1000x750")
-        return self._k._resample(w, h, display or "", clamp)
+        image = self._k._resample(w, h, _text("display", display, optional=True) or "",
+                                  _text("clamp", clamp))
+        return image[:, :, 0] if self._grey else image
 
     def save(self, path: Union[str, "os.PathLike[str]"]) -> None:
         """Writes a coefficient file (float EXR with the space in its
         metadata), as siproject --coeffs does."""
-        self._k._save(os.fspath(path))
+        self._k._save(_path("path", path))
 
 
 def highpass_share(image: np.ndarray, cutoff: Union[float, Sequence[float]] = 0.25):
@@ -228,19 +379,27 @@ def highpass_share(image: np.ndarray, cutoff: Union[float, Sequence[float]] = 0.
     cycles per pixel (one number, or a list for a list of cutoffs)."""
     a = _samples(image)
     single = np.ndim(cutoff) == 0
-    shares = _core._highpass_shares(a, [float(cutoff)] if single else [float(c) for c in cutoff])
+    cutoffs = [cutoff] if single else list(cutoff)
+    shares = _core._highpass_shares(a, [_number("cutoff", c) for c in cutoffs])
     return shares[0] if single else list(shares)
 
 
 def rms_difference(a: np.ndarray, b: np.ndarray, *, border: int = 0) -> float:
     """RMS over every channel of a - b, leaving out `border` pixels along
     each edge (images of one size)."""
-    return _core._rms_difference(_samples(a), _samples(b), int(border))
+    return _core._rms_difference(_samples(a), _samples(b), _whole("border", border, _LONG_RANGE))
 
 
 def psnr(a: np.ndarray, b: np.ndarray, *, peak: float = 1.0, border: int = 0) -> float:
     """20 log10(peak / rms_difference(a, b)) in dB (infinite when equal)."""
-    return _core._psnr(_samples(a), _samples(b), float(peak), int(border))
+    return _core._psnr(_samples(a), _samples(b), _number("peak", peak),
+                       _whole("border", border, _LONG_RANGE))
+
+
+def _coefficients(k) -> "_core.Coefficients":
+    if not isinstance(k, Coefficients):
+        raise _wrong("k", k, "a Coefficients (siproject.coefficients() or load())")
+    return k._k
 
 
 class Reference:
@@ -255,14 +414,14 @@ class Reference:
     """
 
     def __init__(self, truth: np.ndarray, *, border: float = 0.0, threads: int = 0):
-        self._r = _core.L2Reference(_samples(truth), float(border), int(threads))
+        self._r = _core.L2Reference(_samples(truth), _number("border", border), _threads(threads))
 
     border = property(lambda self: self._r.border)
     array = property(lambda self: self._r.array)
 
     def l2_error(self, k: Coefficients) -> float:
         """Continuous L2 error of k's approximation against this reference."""
-        return self._r._l2_error(k._k)
+        return self._r._l2_error(_coefficients(k))
 
     def __repr__(self) -> str:
         h, w, c = self._r.array.shape
@@ -280,14 +439,16 @@ def l2_error(k: Coefficients, truth: Optional[Union[np.ndarray, Reference]] = No
     out along each edge (None: 0, or the Reference's)."""
     if (truth is None) == (zoneplate is None):
         raise ValueError("l2_error(): give exactly one truth: an array or zoneplate=K")
+    border = _number("border", border, optional=True)
     if isinstance(truth, Reference):
-        if border is not None and float(border) != truth.border:
+        if border is not None and border != truth.border:
             raise ValueError(f"l2_error(): border {border:g} given with a Reference made with "
                              f"border {truth.border:g}")
         return truth.l2_error(k)
-    return _core._l2_error(k._k, None if truth is None else _samples(truth),
-                           None if zoneplate is None else float(zoneplate),
-                           int(samples_per_pixel), 0.0 if border is None else float(border))
+    return _core._l2_error(_coefficients(k), None if truth is None else _samples(truth),
+                           _number("zoneplate", zoneplate, optional=True),
+                           _whole("samples_per_pixel", samples_per_pixel),
+                           0.0 if border is None else border)
 
 
 def overshoot(output: np.ndarray, input: np.ndarray, *, neighbourhood: float = 1.0,
@@ -296,8 +457,9 @@ def overshoot(output: np.ndarray, input: np.ndarray, *, neighbourhood: float = 1
     its pixels (the same frame, any ratio): a dict of max_overshoot,
     max_undershoot, pixels, pixels_out_of_range, negative_pixels,
     negative_energy, min and max."""
-    return _core._overshoot(_samples(output), _samples(input), float(neighbourhood),
-                            float(tolerance), int(border))
+    return _core._overshoot(_samples(output), _samples(input),
+                            _number("neighbourhood", neighbourhood),
+                            _number("tolerance", tolerance), _whole("border", border, _LONG_RANGE))
 
 
 def luminance(image: np.ndarray) -> np.ndarray:
@@ -308,20 +470,28 @@ def luminance(image: np.ndarray) -> np.ndarray:
 def srgb8(image: np.ndarray) -> np.ndarray:
     """Linear values as the 8-bit sRGB an 8-bit output file holds (every
     channel encoded and clamped to [0, 1]), uint8 of the same shape."""
-    return _core._srgb8(_samples(image))
+    encoded = _core._srgb8(_samples(image))
+    return encoded[:, :, 0] if _grey(image) else encoded
 
 
 def read_image(path: Union[str, "os.PathLike[str]"]) -> np.ndarray:
     """An image file as float32 (height, width, channels), read by
     OpenImageIO as siproject reads it (integer sRGB files decoded to linear)."""
-    return _core._read_image(os.fspath(path))
+    return _core._read_image(_path("path", path))
 
 
 def write_image(path: Union[str, "os.PathLike[str]"], image: np.ndarray, *,
                 channel_names: Sequence[str] = (), alpha: int = -1, half: bool = False) -> None:
     """Writes an image as siproject writes its outputs: EXR (and other float
-    formats) in float, or half; 8-bit formats (PNG, JPEG...) sRGB-encoded and
-    clamped to [0, 1]. The file replaces an existing one only once written
-    whole."""
-    _core._write_image(os.fspath(path), _samples(image), list(channel_names), int(alpha),
-                       bool(half))
+    formats) in float, or half (magnitudes past half's largest value, 65504,
+    clamped there with a RuntimeWarning, as siproject -d half does); 8-bit
+    formats (PNG, JPEG...) sRGB-encoded and clamped to [0, 1]. The file
+    replaces an existing one only once written whole; a signal that ends the
+    process meanwhile (SIGTERM, SIGHUP...) removes the partial file."""
+    if isinstance(channel_names, str) or not all(isinstance(n, str) for n in channel_names):
+        raise _wrong("channel_names", channel_names, "a sequence of strings")
+    clamped = _core._write_image(_path("path", path), _samples(image), list(channel_names),
+                                 _whole("alpha", alpha), _flag("half", half))
+    if clamped:
+        _warnings.warn(f"write_image(): half=True: {clamped} samples beyond +-65504 clamped there",
+                       RuntimeWarning, stacklevel=2)
