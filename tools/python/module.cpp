@@ -98,12 +98,19 @@ py::tuple run_form(py::object input, const Settings& s, bool coefficients_only) 
   std::string path;
   if (is_array) {
     array = py::reinterpret_borrow<py::array>(input);
-    const bool half = array.dtype().kind() == 'f' && array.itemsize() == 2;
-    if (array.ndim() != 3 || !(array.flags() & py::array::c_style) ||
-        !(half || (array.dtype().kind() == 'f' && array.itemsize() == 4)))
-      throw std::logic_error("run_form(): the array is not C-contiguous float32 or float16 (H, W, C)");
+    const char kind = array.dtype().kind();
+    const auto size = array.itemsize();
+    const std::optional<SampleType> type =
+        kind == 'f' && size == 4   ? std::optional(SampleType::Float)
+        : kind == 'f' && size == 2 ? std::optional(SampleType::Half)
+        : kind == 'u' && size == 1 ? std::optional(SampleType::UInt8)
+        : kind == 'u' && size == 2 ? std::optional(SampleType::UInt16)
+                                   : std::nullopt;
+    if (array.ndim() != 3 || !(array.flags() & py::array::c_style) || !type)
+      throw std::logic_error("run_form(): the array is not C-contiguous float32, float16, uint8 or "
+                             "uint16 (H, W, C)");
     inputs.push_back(ProjectionInput::memory(
-        SampleView(array.data(), long(array.shape(1)), long(array.shape(0)), int(array.shape(2)), half),
+        SampleView(array.data(), long(array.shape(1)), long(array.shape(0)), int(array.shape(2)), *type),
         "array"));
   } else {
     path = py::str(input);
@@ -144,7 +151,8 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
                     std::optional<double> density, const std::string& density_spelling,
                     const std::string& nonfinite,
                     const std::string& prefilter, const std::string& clamp,
-                    bool highlight_compress, int threads, bool coefficients_only) {
+                    bool highlight_compress, int threads, bool coefficients_only,
+                    const std::string& input_transfer) {
   Settings s;
   s.size = size;
   s.factor = factor;
@@ -161,6 +169,7 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
   s.prefilter = prefilter;
   s.clamp = clamp;
   s.highlight_compress = highlight_compress;
+  s.input_transfer = input_transfer;
   s.threads = threads;
   return run_form(input, s, coefficients_only);
 }

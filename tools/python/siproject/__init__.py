@@ -69,7 +69,7 @@ def _size(size: Optional[Size]) -> str:
 
 
 def _samples(input: Input):
-    """A path as a str, an array as C-contiguous float32 or float16 (H, W, C)."""
+    """A path as a str, an array as C-contiguous float32, float16, uint8 or uint16 (H, W, C)."""
     if isinstance(input, (str, os.PathLike)):
         return os.fspath(input)
     a = np.asarray(input)
@@ -78,22 +78,24 @@ def _samples(input: Input):
     if a.ndim != 3:
         raise ValueError(f"array: expected (height, width) or (height, width, channels), "
                          f"not shape {a.shape}")
-    if a.dtype not in (np.float32, np.float16):
-        if not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)):
-            raise ValueError(f"array: samples of type {a.dtype} (expected float32 or float16)")
+    if a.dtype not in (np.float32, np.float16, np.uint8, np.uint16):
+        if not np.issubdtype(a.dtype, np.floating):
+            raise ValueError(f"array: samples of type {a.dtype} (expected float, linear; or uint8 "
+                             f"or uint16, display-encoded and scaled to [0, 1] as in image files)")
         a = a.astype(np.float32)
     return np.ascontiguousarray(a)
 
 
 def _form(input, size, factor, generator, method, display, boundary, lattice, density,
-          nonfinite, prefilter, clamp, highlight_compress, threads, coefficients_only):
+          nonfinite, prefilter, clamp, highlight_compress, threads, coefficients_only,
+          input_transfer="auto"):
     result = _core._form(
         _samples(input), _size(size),
         None if factor is None else float(factor), "" if factor is None else str(factor),
         generator, method, display or "", boundary, lattice,
         None if density is None else float(density), "" if density is None else str(density),
         nonfinite, prefilter, clamp, bool(highlight_compress), int(threads),
-        coefficients_only)
+        coefficients_only, str(input_transfer))
     for w in result[2]:
         _warnings.warn(w, RuntimeWarning, stacklevel=3)
     return result
@@ -105,14 +107,16 @@ def project(input: Input, *, size: Optional[Size] = None, factor: Optional[float
             lattice: str = "cartesian", density: Optional[float] = None,
             nonfinite: str = "error",
             prefilter: str = "fft", clamp: str = "none", highlight_compress: bool = False,
-            threads: int = 0) -> np.ndarray:
+            threads: int = 0, input_transfer: str = "auto") -> np.ndarray:
     """The final image of a render, as siproject forms it.
 
     input: a file path (any image OpenImageIO reads, streamed in bands as
         siproject reads it; a coefficient file is evaluated instead), or an
         array of samples (height, width[, channels]); float32 C-contiguous
-        arrays are read where they are, float16 too, other types converted
-        to float32 first.
+        arrays are read where they are, float16, uint8 and uint16 too,
+        other float types converted to float32 first. Float samples are
+        linear light; uint8 and uint16 mean what they mean in image files
+        and scikit-image (scaled to [0, 1], sRGB-encoded: decoded first).
     size: output size N, (W, H) or "WxH"; or factor: output = input / factor.
     generator: box, tent, quadratic, cubic, bspline:N, mitchell, gaussian,
         catmull-rom, lanczos3; hex-hat or hex-quartic with lattice="hex".
@@ -129,13 +133,16 @@ def project(input: Input, *, size: Optional[Size] = None, factor: Optional[float
     prefilter: "fft" or "recursive". clamp: "none", "zero" or "local".
     highlight_compress: compress the samples' range before projecting.
     threads: worker threads, 0 for every core; the result is the same for any.
+    input_transfer: "auto" (integer samples sRGB unless a file is tagged
+        otherwise, float linear), "srgb", "linear" or "gammaG", as
+        siproject's --input-transfer.
 
     Returns a float32 array (height, width, channels): the linear result
     siproject writes to a float EXR, bit for bit.
     """
     image, _, _ = _form(input, size, factor, generator, method, display, boundary, lattice,
                         density, nonfinite, prefilter, clamp, highlight_compress,
-                        threads, False)
+                        threads, False, input_transfer)
     return image
 
 
@@ -144,7 +151,8 @@ def coefficients(input: Input, *, size: Optional[Size] = None, factor: Optional[
                  boundary: str = "mirror", lattice: str = "cartesian",
                  density: Optional[float] = None,
                  nonfinite: str = "error", prefilter: str = "fft",
-                 highlight_compress: bool = False, threads: int = 0) -> "Coefficients":
+                 highlight_compress: bool = False, threads: int = 0,
+                 input_transfer: str = "auto") -> "Coefficients":
     """The coefficients of the approximation, with their space.
 
     The keywords are project()'s (there is no display or clamp: those apply
@@ -153,7 +161,8 @@ def coefficients(input: Input, *, size: Optional[Size] = None, factor: Optional[
     image exactly.
     """
     _, k, _ = _form(input, size, factor, generator, method, None, boundary, lattice, density,
-                    nonfinite, prefilter, "none", highlight_compress, threads, True)
+                    nonfinite, prefilter, "none", highlight_compress, threads, True,
+                    input_transfer)
     return Coefficients(k)
 
 
