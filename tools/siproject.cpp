@@ -167,7 +167,7 @@ int run(const Options& o) {
     if (!o.quiet) std::cerr << "siproject: warning: " << w << "\n";
   Coefficients& k = f.coefficients;
   const long W = f.width, H = f.height;
-  const bool compressed = f.highlight_compressed, srgb = f.inputs.srgb;
+  const bool compressed = f.highlight_compressed;
   const bool input_half = f.input_half;
   const Clamp clamp = r.clamp;
   // Output samples as the input's (oiiotool's habit): half when every input
@@ -212,7 +212,7 @@ int run(const Options& o) {
       {"sis:display", shown.name()},
       {"sis:boundary", boundary_name(k.boundary)},
       {"sis:input", input_label},
-      {"sis:input_transfer", srgb ? "srgb" : "linear"},
+      {"sis:input_transfer", f.input_transfer.name()},
       {"sis:highlight_compress", compressed ? "1" : "0"},
       {"sis:clamp", clamp_name(clamp)},
       {"sis:output_min", std::to_string(after.min)},
@@ -231,6 +231,7 @@ int run(const Options& o) {
     coeffs_file.emplace(stage_coefficients(o.coeffs, k, names,
                                            {{"sis:input", md[4].second},
                                             {"sis:input_format", input_half ? "half" : "float"},
+                                            {"sis:input_transfer", f.input_transfer.name()},
                                             {"sis:highlight_compress", compressed ? "1" : "0"}}));
   Buffer<double>().swap(k.c.data);
   StagedFile output_file = stage_image(o.output, image, names, md, f.inputs.alpha, out_format);
@@ -524,6 +525,16 @@ int main(int argc, char** argv) {
                  "output passes half's largest value 65504; -d half clamps there instead]");
   app.add_option("--nonfinite", o.settings.nonfinite,
                  "NaN/Inf samples: error, or zero to replace them with 0")->capture_default_str();
+  auto* transfer = app.add_option(
+      "--input-transfer", o.settings.input_transfer,
+      "how the input's samples encode light: auto (integer samples, 8 or 16 bits, are sRGB unless "
+      "the file is tagged linear or with a gamma, as viewers take them; float samples linear), "
+      "srgb, linear or gammaG (e.g. gamma2.2); decoded to linear before projecting")
+                      ->capture_default_str();
+  std::string iscolorspace;
+  auto* ics = app.add_option("--iscolorspace", iscolorspace,
+                             "oiiotool's spelling of --input-transfer: sRGB or linear")
+                  ->excludes(transfer);
   app.add_flag("--highlight-compress", o.settings.highlight_compress,
                "compress the samples' range with OpenImageIO's log curve (identity below 0.18) "
                "before projecting, expand after: far less HDR ringing, at a cost in energy");
@@ -554,6 +565,7 @@ int main(int argc, char** argv) {
     st.scale_spelling = sca->as<std::string>();
   }
   if (st.density_given) st.density_spelling = dens->as<std::string>();
+  if (ics->count() > 0) st.input_transfer = iscolorspace;
   try {
     return run_jobs(o);
   } catch (const UsageError& e) {

@@ -164,7 +164,10 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs) {
     long width, height, full_x, full_y, full_w, full_h, data_x, data_y;
     int channels, alpha;
     std::vector<std::string> names;
-    bool half, srgb, coefficients;
+    bool half;
+    Transfer transfer;
+    int integer_bits;
+    bool coefficients;
     std::string path;
   };
   std::vector<Header> h;
@@ -176,14 +179,16 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs) {
       const long full = in.rows > 0 ? in.rows : in.row + im.height;
       h.push_back({&in, im.width, im.height, 0, 0, im.width, full, 0, in.row, im.channels, -1,
                    in.channel_names.empty() ? default_names(im.channels) : in.channel_names,
-                   im.half, false, false, in.name});
+                   im.is_half(), default_transfer(im.is_integer(), ""),
+                   im.type == SampleType::UInt8 ? 8 : im.type == SampleType::UInt16 ? 16 : 0, false,
+                   in.name});
       continue;
     }
     auto reader = std::make_shared<ImageReader>(in.path);
     const ImageReader& r = *reader;
     h.push_back({&in, r.width(), r.height(), r.full_x(), r.full_y(), r.full_width(),
                  r.full_height(), r.data_x(), r.data_y(), r.channels(), r.alpha_channel(),
-                 r.channel_names(), r.stores_half(), r.srgb_encoded(), is_coefficient_file(r),
+                 r.channel_names(), r.stores_half(), r.transfer(), r.integer_bits(), is_coefficient_file(r),
                  in.path});
     if (inputs.size() > kKeptOpen) reader->release();
     set.readers.push_back(std::move(reader));
@@ -204,6 +209,9 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs) {
       if (b.coefficients) throw RequestError(b.path + ": a coefficient file cannot be a band");
       if (b.channels != first.channels || b.names != first.names)
         throw InputError(m.str() + "other channels");
+      if (b.transfer != first.transfer)
+        throw InputError(m.str() + "samples of another transfer (" + b.transfer.name() + ", not " +
+                         first.transfer.name() + ")");
       if (b.full_x != first.full_x || b.full_y != first.full_y || b.full_w != first.full_w ||
           b.full_h != first.full_h)
         throw InputError(m.str() + "another display window");
@@ -234,7 +242,11 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs) {
     if (b.input->image && b.half && !set.half)
       throw RequestError(b.path + ": half samples in memory with bands that are not half; "
                          "give every band as half or every band as float");
-  set.srgb = std::all_of(h.begin(), h.end(), [](const Header& b) { return b.srgb; });
+  set.transfer = first.transfer;
+  set.srgb = set.transfer.kind == Transfer::SRGB;
+  for (const Header& b : h) set.integer_bits = std::max(set.integer_bits, b.integer_bits);
+  if (!std::all_of(h.begin(), h.end(), [](const Header& b) { return b.integer_bits > 0; }))
+    set.integer_bits = 0;
   set.label = (first.input->image ? first.path : fs::path(first.path).filename().string()) +
               (h.size() > 1 ? " and " + std::to_string(h.size() - 1) + " more bands" : "");
   for (const Header& b : h) set.bands.push_back(*b.input);
@@ -533,15 +545,21 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
     for (std::size_t q = 0; q < n; ++q)
       if (int((k0 + q) % C) != alpha) data[q] = static_cast<float>(f(data[q]));
   };
-  // Integer samples tagged sRGB (PNG, JPEG, 8- and 16-bit TIFF) are decoded
-  // to linear light first: the method filters radiance, and an 8-bit output
-  // encodes again (a flat 128 stays 128).
+  // Display-encoded samples (by default integer ones: PNG, JPEG, TIFF...,
+  // default_transfer) are decoded to linear light first: the method filters
+  // radiance, and an 8-bit output encodes again (a flat 128 stays 128).
   SampleStages stages;
   ValueHook& decode = stages.decode;
   ValueHook& compress = stages.compress;
-  if (in.srgb)
+  p.transfer = rq.input_transfer ? *rq.input_transfer : in.transfer;
+  if (p.transfer.kind == Transfer::SRGB)
     decode = [&](float* v, std::size_t n, std::size_t k0) {
       for_colour(v, n, [](double x) { return double(srgb_to_linear(float(x))); }, k0);
+    };
+  if (p.transfer.kind == Transfer::Power)
+    decode = [&, g = p.transfer.gamma](float* v, std::size_t n, std::size_t k0) {
+      for (std::size_t q = 0; q < n; ++q)
+        if (int((k0 + q) % C) != alpha) v[q] = float(std::pow(std::max(0.0, double(v[q])), g));
     };
   if (rq.highlight_compress)
     compress = [&](float* v, std::size_t n, std::size_t k0) { for_colour(v, n, highlight_compress, k0); };

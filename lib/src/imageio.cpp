@@ -261,14 +261,72 @@ long ImageReader::full_y() const { return impl_->spec.full_y; }
 long ImageReader::full_width() const { return impl_->spec.full_width; }
 long ImageReader::full_height() const { return impl_->spec.full_height; }
 int ImageReader::alpha_channel() const { return impl_->spec.alpha_channel; }
-bool ImageReader::srgb_encoded() const {
-  const ImageSpec& s = impl_->spec;
-  auto integer = [](TypeDesc t) { return t.basetype != TypeDesc::HALF && t.basetype != TypeDesc::FLOAT && t.basetype != TypeDesc::DOUBLE; };
-  const bool ints = s.channelformats.empty()
-                        ? integer(s.format)
-                        : std::all_of(s.channelformats.begin(), s.channelformats.end(), integer);
-  return ints && OIIO::Strutil::iequals(s.get_string_attribute("oiio:ColorSpace"), "sRGB");
+namespace {
+bool integer_type(TypeDesc t) {
+  return t.basetype != TypeDesc::HALF && t.basetype != TypeDesc::FLOAT && t.basetype != TypeDesc::DOUBLE;
 }
+}  // namespace
+
+int ImageReader::integer_bits() const {
+  const ImageSpec& s = impl_->spec;
+  std::vector<TypeDesc> types = s.channelformats;
+  if (types.empty()) types.push_back(s.format);
+  int bits = 0;
+  for (TypeDesc t : types) {
+    if (!integer_type(t)) return 0;
+    bits = std::max(bits, int(t.size()) * 8);
+  }
+  return bits;
+}
+
+Transfer ImageReader::transfer() const {
+  const ImageSpec& s = impl_->spec;
+  return default_transfer(integer_bits() > 0, s.get_string_attribute("oiio:ColorSpace"),
+                          s.get_float_attribute("oiio:Gamma", 0.0f));
+}
+
+std::string Transfer::name() const {
+  if (kind == Linear) return "linear";
+  if (kind == SRGB) return "srgb";
+  std::ostringstream m;
+  m << "gamma" << gamma;
+  return m.str();
+}
+
+Transfer parse_transfer(const std::string& spelling) {
+  using OIIO::Strutil::iequals;
+  if (iequals(spelling, "linear")) return Transfer::linear();
+  if (iequals(spelling, "srgb")) return Transfer::srgb();
+  if (OIIO::Strutil::istarts_with(spelling, "gamma") && spelling.size() > 5) {
+    std::size_t used = 0;
+    double g = 0;
+    try {
+      g = std::stod(spelling.substr(5), &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == spelling.size() - 5 && std::isfinite(g) && g > 0)
+      return g == 1.0 ? Transfer::linear() : Transfer::power(g);
+  }
+  throw std::invalid_argument("'" + spelling + "': expected srgb, linear or gammaG (G > 0)");
+}
+
+Transfer default_transfer(bool integer_samples, const std::string& colorspace, double gamma) {
+  if (!integer_samples) return Transfer::linear();
+  using OIIO::Strutil::iequals;
+  using OIIO::Strutil::istarts_with;
+  for (const char* linear : {"linear", "lin_srgb", "lin_rec709", "scene_linear", "raw"})
+    if (iequals(colorspace, linear)) return Transfer::linear();
+  double g = 0;
+  if (istarts_with(colorspace, "GammaCorrected"))
+    g = gamma;
+  else if (istarts_with(colorspace, "Gamma"))
+    g = OIIO::Strutil::stof(colorspace.substr(5));
+  if (g == 1.0) return Transfer::linear();
+  if (std::isfinite(g) && g > 0) return Transfer::power(g);
+  return Transfer::srgb();
+}
+
 std::string ImageReader::format_name() const { return impl_->format; }
 std::vector<std::string> ImageReader::channel_names() const { return impl_->spec.channelnames; }
 std::string ImageReader::attribute(const std::string& name) const {
@@ -438,7 +496,7 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
   std::vector<FileSignature> signatures(paths.size());
   for (std::size_t f = 0; f < paths.size(); ++f) {
     if (const SampleView& im = sources[f].image) {  // samples in memory
-      if (half != im.half)
+      if (half != im.is_half())
         throw std::logic_error(paths[f] + ": read_bands() with half " + (half ? "on" : "off") +
                                " on samples in memory that are not");
       start.push_back(start.back() + im.height);
@@ -496,9 +554,18 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
           // to the end of the file's strip, the band or the file
           const long y1 = std::min({(y0 / strip + 1) * strip, bands.end(b) - start[f],
                                     start[f + 1] - start[f]});
-          if (const SampleView& im = sources[f].image)  // copied: the callbacks write in place
-            std::memcpy(half ? static_cast<void*>(half_rows.data()) : float_rows.data(), im.row(y0),
-                        std::size_t(y1 - y0) * im.row_size() * im.value_bytes());
+          if (const SampleView& im = sources[f].image) {  // copied: the callbacks write in place
+            const std::size_t n = std::size_t(y1 - y0) * im.row_size();
+            if (im.is_integer()) {  // scaled to [0, 1] as OpenImageIO converts a file's integers
+              const TypeDesc t = im.type == SampleType::UInt8 ? TypeDesc::UINT8 : TypeDesc::UINT16;
+              for (long r = y0; r < y1; ++r)
+                OIIO::convert_pixel_values(t, im.row(r), TypeDesc::FLOAT,
+                                           float_rows.data() + std::size_t(r - y0) * im.row_size(),
+                                           int(im.row_size()));
+            } else
+              std::memcpy(half ? static_cast<void*>(half_rows.data()) : float_rows.data(), im.row(y0),
+                          n * im.value_bytes());
+          }
           else if (half)
             reader(f).read_rows_half(y0, y1, half_rows.data());
           else

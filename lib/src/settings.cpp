@@ -1,5 +1,6 @@
 #include "sis/settings.h"
 
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -23,6 +24,11 @@ std::string spelling(const std::string& given, double value) {
   std::ostringstream s;
   s << value;
   return s.str();
+}
+
+bool is_auto(const std::string& s) {
+  return s.size() == 4 && std::tolower(s[0]) == 'a' && std::tolower(s[1]) == 'u' &&
+         std::tolower(s[2]) == 't' && std::tolower(s[3]) == 'o';
 }
 
 // Runs f, its std::invalid_argument a RequestError prefixed by `option`.
@@ -132,6 +138,13 @@ Resolved resolve(const Settings& o) {
     throw RequestError("--lattice hex has the min-error method only");
   if (hex && o.prefilter != "fft") throw RequestError("--lattice hex has the fft prefilter only");
   r.prefilter = o.prefilter == "fft" ? PrefilterMethod::FFT : PrefilterMethod::Recursive;
+  if (!is_auto(o.input_transfer))
+    try {
+      r.input_transfer = parse_transfer(o.input_transfer);
+    } catch (const std::invalid_argument&) {
+      throw RequestError("--input-transfer '" + o.input_transfer +
+                         "': expected auto, srgb, linear or gammaG (G > 0, e.g. gamma2.2)");
+    }
   r.zero_nonfinite = o.nonfinite == "zero";
   r.highlight_compress = o.highlight_compress;
   return r;
@@ -193,8 +206,17 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
     if (o.lattice_given || o.density_given)
       throw RequestError(reader.path() + " is a coefficient file: its lattice is recorded in it; "
                          "drop --lattice and --density");
+    if (r.input_transfer)
+      throw RequestError(reader.path() + " is a coefficient file: its input's transfer was decoded "
+                         "before projecting; drop --input-transfer");
     f.from_coefficient_file = true;
     f.input_half = reader.attribute("sis:input_format") == "half";
+    try {
+      const std::string recorded = reader.attribute("sis:input_transfer");
+      f.input_transfer = recorded.empty() ? Transfer::linear() : parse_transfer(recorded);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(reader.path() + ": coefficient file metadata: sis:input_transfer " + e.what());
+    }
     const auto t = Clock::now();
     k = load_coefficients(reader.path(), r.zero_nonfinite, &f.replaced, reader.signature());
     f.highlight_compressed = reader.attribute("sis:highlight_compress") == "1";
@@ -229,6 +251,7 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
     rq.prefilter = r.prefilter;
     rq.zero_nonfinite = r.zero_nonfinite;
     rq.highlight_compress = r.highlight_compress;
+    rq.input_transfer = r.input_transfer;
     rq.threads = threads;
     rq.coefficient_file = fr.coefficient_file;
     rq.float_coefficients = fr.float_coefficients;
@@ -243,6 +266,7 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
     f.local_range = std::move(p.local_range);
     f.inputs = std::move(p.inputs);
     f.highlight_compressed = r.highlight_compress;
+    f.input_transfer = p.transfer;
     f.acquire_seconds = p.acquire_seconds;
     f.prefilter_seconds = p.prefilter_seconds;
     f.estimated_bytes = p.estimated_bytes;

@@ -171,13 +171,20 @@ py::tuple run_form(py::object input, const Settings& s, bool coefficients_only) 
   std::string path;
   if (is_array) {
     array = py::reinterpret_borrow<py::array>(input);
-    const bool half = array.dtype().kind() == 'f' && array.itemsize() == 2;
-    if (array.ndim() != 3 || !(array.flags() & py::array::c_style) ||
-        !(half || (array.dtype().kind() == 'f' && array.itemsize() == 4)))
-      throw std::logic_error("run_form(): the array is not C-contiguous float32 or float16 (H, W, C)");
+    const char kind = array.dtype().kind();
+    const auto size = array.itemsize();
+    const std::optional<SampleType> type =
+        kind == 'f' && size == 4   ? std::optional(SampleType::Float)
+        : kind == 'f' && size == 2 ? std::optional(SampleType::Half)
+        : kind == 'u' && size == 1 ? std::optional(SampleType::UInt8)
+        : kind == 'u' && size == 2 ? std::optional(SampleType::UInt16)
+                                   : std::nullopt;
+    if (array.ndim() != 3 || !(array.flags() & py::array::c_style) || !type)
+      throw std::logic_error("run_form(): the array is not C-contiguous float32, float16, uint8 or "
+                             "uint16 (H, W, C)");
     inputs.push_back(ProjectionInput::memory(
         SampleView(array.data(), long(array.shape(1)), long(array.shape(0)),
-                   channel_count(array.shape(2), "array"), half),
+                   channel_count(array.shape(2), "array"), *type),
         "array"));
   } else {
     path = py::str(input);
@@ -224,7 +231,8 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
                     std::optional<double> density, const std::string& density_spelling,
                     const std::string& nonfinite,
                     const std::string& prefilter, const std::string& clamp,
-                    bool highlight_compress, int threads, bool coefficients_only) {
+                    bool highlight_compress, int threads, bool coefficients_only,
+                    const std::string& input_transfer) {
   Settings s;
   s.size = size;
   s.factor = factor;
@@ -241,6 +249,7 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
   s.prefilter = prefilter;
   s.clamp = clamp;
   s.highlight_compress = highlight_compress;
+  s.input_transfer = input_transfer;
   s.threads = threads;
   return run_form(input, s, coefficients_only);
 }
@@ -401,7 +410,8 @@ PYBIND11_MODULE(_core, m) {
         py::arg("factor_spelling"), py::arg("generator"), py::arg("method"), py::arg("display"),
         py::arg("boundary"), py::arg("lattice"), py::arg("density"), py::arg("density_spelling"),
         py::arg("nonfinite"), py::arg("prefilter"), py::arg("clamp"),
-        py::arg("highlight_compress"), py::arg("threads"), py::arg("coefficients_only"));
+        py::arg("highlight_compress"), py::arg("threads"), py::arg("coefficients_only"),
+        py::arg("input_transfer"));
   m.def("_load", &load_file);
   m.def("_highpass_shares", [](FloatArray a, std::vector<double> cutoffs) {
     const ImageView im = view_of(a, "highpass_share()");

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -65,7 +66,9 @@ struct InputSet {
   std::vector<std::string> channel_names;
   int alpha = -1;
   bool half = false;   // every input stores half
-  bool srgb = false;   // integer samples tagged sRGB: decoded to linear light
+  bool srgb = false;   // the inputs' own transfer is sRGB (transfer.kind == SRGB)
+  Transfer transfer;   // the inputs' own (default_transfer: integer samples sRGB unless tagged)
+  int integer_bits = 0;  // bits of integer samples (8, 16...), 0 for float or half
   bool coefficient_file = false;
   std::string label;   // "render.exr and 2 more bands"
   std::vector<ProjectionInput> bands;  // in row order
@@ -99,6 +102,8 @@ struct ProjectionRequest {
   PrefilterMethod prefilter = PrefilterMethod::FFT;
   bool zero_nonfinite = false;     // NaN/Inf samples: replaced by 0, else an InputError
   bool highlight_compress = false;
+  // The inputs' transfer as the user states it (none: their own, InputSet::transfer).
+  std::optional<Transfer> input_transfer;
   int threads = 1;
   bool coefficient_file = false;   // the caller will also write the coefficients (memory estimate)
   // The sample type the coefficients are kept in: float (as a coefficient
@@ -125,6 +130,7 @@ struct Projection {
   std::unique_ptr<LocalRange> local_range;  // of the samples under each output pixel
   NonFiniteReport nonfinite;                // those replaced by 0
   bool highlight_compressed = false;
+  Transfer transfer;  // the samples' transfer, decoded before projecting
   double acquire_seconds = 0, prefilter_seconds = 0;
   std::uint64_t estimated_bytes = 0;
 };

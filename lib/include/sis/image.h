@@ -77,23 +77,34 @@ struct ImageView {
   float at(long x, long y, int c) const { return data[(std::size_t(y) * width + x) * channels + c]; }
 };
 
+// The sample types of samples held in memory: float, half (IEEE binary16
+// bits), and unsigned integers, which mean what they mean in image files
+// (scaled to [0, 1]: v / 255, v / 65535, as OpenImageIO converts them).
+enum class SampleType { Float, Half, UInt8, UInt16 };
+
 // Samples held elsewhere (an Image, a caller's array): interleaved rows,
-// float or half (IEEE binary16 bits), read where they are. The owner keeps
-// them alive and unchanged while they are read.
+// of one SampleType, read where they are. The owner keeps them alive and
+// unchanged while they are read.
 struct SampleView {
   const void* data = nullptr;
   long width = 0, height = 0;
   int channels = 0;
-  bool half = false;
+  SampleType type = SampleType::Float;
 
   SampleView() = default;
   SampleView(const Image& im)  // NOLINT: every Image is such a view
       : data(im.data.data()), width(im.width), height(im.height), channels(im.channels) {}
   SampleView(const void* d, long w, long h, int c, bool is_half)
-      : data(d), width(w), height(h), channels(c), half(is_half) {}
+      : data(d), width(w), height(h), channels(c), type(is_half ? SampleType::Half : SampleType::Float) {}
+  SampleView(const void* d, long w, long h, int c, SampleType t)
+      : data(d), width(w), height(h), channels(c), type(t) {}
   explicit operator bool() const { return data != nullptr; }
+  bool is_half() const { return type == SampleType::Half; }
+  bool is_integer() const { return type == SampleType::UInt8 || type == SampleType::UInt16; }
   std::size_t row_size() const { return std::size_t(width) * channels; }
-  std::size_t value_bytes() const { return half ? 2 : 4; }
+  std::size_t value_bytes() const {
+    return type == SampleType::UInt8 ? 1 : type == SampleType::Float ? 4 : 2;
+  }
   const unsigned char* row(long y) const {
     return static_cast<const unsigned char*>(data) + std::size_t(y) * row_size() * value_bytes();
   }

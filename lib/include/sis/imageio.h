@@ -33,6 +33,32 @@ enum class SampleFormat { Half, Float };
 SampleFormat parse_sample_format(const std::string& spelling);  // half | float
 std::string sample_format_name(SampleFormat f);
 
+// How stored samples encode linear light: linear, the sRGB curve
+// (IEC 61966-2-1) or a pure power (linear = stored ^ gamma). What the
+// engine decodes before it projects.
+struct Transfer {
+  enum Kind { Linear, SRGB, Power };
+  Kind kind = Linear;
+  double gamma = 1.0;  // Power only
+  static Transfer linear() { return {}; }
+  static Transfer srgb() { return {SRGB, 1.0}; }
+  static Transfer power(double g) { return {Power, g}; }
+  std::string name() const;  // "linear", "srgb", "gamma2.2" (sis:input_transfer)
+  bool operator==(const Transfer& o) const { return kind == o.kind && gamma == o.gamma; }
+  bool operator!=(const Transfer& o) const { return !(*this == o); }
+};
+// The one rule for samples whose transfer is not stated by the user, files
+// and arrays alike: float and half samples are linear; integer samples are
+// display-encoded, sRGB, unless their colour space (OpenImageIO's
+// oiio:ColorSpace, "" for none) says linear ("Linear", "lin_srgb",
+// "scene_linear"...) or a power ("Gamma2.2", or "GammaCorrected" with
+// `gamma`, OpenImageIO's oiio:Gamma; a PNG's gAMA chunk), as viewers and
+// oiiotool's colour management take them.
+Transfer default_transfer(bool integer_samples, const std::string& colorspace, double gamma = 0);
+// "linear", "srgb" or "gammaG" (G > 0; any case: "sRGB", "Linear"), as
+// Transfer::name() spells them; else std::invalid_argument.
+Transfer parse_transfer(const std::string& spelling);
+
 // IEEE half-precision bits to float, exactly (every half is a float); with
 // the processor's F16C conversion where it has one. Returns whether every
 // value was finite (a check on the half bits, in the same pass).
@@ -96,9 +122,13 @@ class ImageReader {
   long full_height() const;
   std::vector<std::string> channel_names() const;
   int alpha_channel() const;  // -1 if none
-  // True when the samples are integers tagged sRGB-encoded (oiio:ColorSpace;
-  // PNG, JPEG, 8- and 16-bit TIFF): their colour is display-referred.
-  bool srgb_encoded() const;
+  // The samples' transfer by default_transfer(): integer samples sRGB
+  // unless tagged otherwise (PNG, JPEG, TIFF, PNM... of 8 or 16 bits).
+  Transfer transfer() const;
+  bool srgb_encoded() const { return transfer().kind == Transfer::SRGB; }
+  // Bits of integer samples (8, 16, 32: the widest channel's), 0 when a
+  // channel is float or half.
+  int integer_bits() const;
   std::string format_name() const;
   // A string attribute of the file's metadata ("" when absent).
   std::string attribute(const std::string& name) const;

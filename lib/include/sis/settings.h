@@ -32,6 +32,9 @@ struct Settings {
   double density = 1.0;
   std::string density_spelling;  // as given ("" : the number)
   bool highlight_compress = false;
+  // The inputs' transfer: auto (integer samples sRGB unless tagged
+  // otherwise, float linear: default_transfer), srgb, linear or gammaG.
+  std::string input_transfer = "auto";
   int threads = 0;  // 0: every core
   // Which were given (a coefficient file refuses them; a conventional
   // filter named alone means the conventional method).
@@ -63,6 +66,7 @@ struct Resolved {
   Clamp clamp = Clamp::None;
   PrefilterMethod prefilter = PrefilterMethod::FFT;
   bool zero_nonfinite = false, highlight_compress = false;
+  std::optional<Transfer> input_transfer;  // none: auto (the inputs' own)
   int threads = 1;                  // resolved: at least 1
   SizeSpec size;                     // --size (none: not given)
 };
@@ -92,6 +96,7 @@ struct Formed {
   bool from_coefficient_file = false;
   bool highlight_compressed = false;  // the coefficients hold compressed values
   bool input_half = false;            // every input stores half (a coefficient file: its input did)
+  Transfer input_transfer;            // the inputs' transfer, decoded (a coefficient file: its input's)
   NonFiniteReport replaced;           // non-finite samples (or coefficients) replaced by 0
   std::vector<std::string> warnings;  // for the user, without the tool's name
   double acquire_seconds = 0, prefilter_seconds = 0, resample_seconds = 0;

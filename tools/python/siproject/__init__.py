@@ -169,7 +169,7 @@ def _size(size: Optional[Size], output_shape=None, factor=None) -> str:
 
 
 def _samples(input: Input):
-    """A path as a str, an array as C-contiguous float32 or float16 (H, W, C)."""
+    """A path as a str, an array as C-contiguous float32, float16, uint8 or uint16 (H, W, C)."""
     if isinstance(input, (str, os.PathLike)):
         return _path("input", input)
     a = np.asarray(input)
@@ -180,9 +180,10 @@ def _samples(input: Input):
                          f"not shape {a.shape}")
     if a.shape[2] > _INT_RANGE[1]:  # before any copy
         raise ValueError(f"array: {a.shape[2]} channels: at most {_INT_RANGE[1]}")
-    if a.dtype not in (np.float32, np.float16):
-        if not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)):
-            raise ValueError(f"array: samples of type {a.dtype} (expected float32 or float16)")
+    if a.dtype not in (np.float32, np.float16, np.uint8, np.uint16):
+        if not np.issubdtype(a.dtype, np.floating):
+            raise ValueError(f"array: samples of type {a.dtype} (expected float, linear; or uint8 "
+                             f"or uint16, display-encoded and scaled to [0, 1] as in image files)")
         a = a.astype(np.float32)
     return np.ascontiguousarray(a)
 
@@ -197,7 +198,8 @@ def _grey(input) -> bool:
 
 
 def _form(input, coefficients_only, *, size, output_shape, factor, generator, method, display,
-          boundary, lattice, density, nonfinite, prefilter, clamp, highlight_compress, threads):
+          boundary, lattice, density, nonfinite, prefilter, clamp, highlight_compress, threads,
+          input_transfer):
     factor_spelling = "" if factor is None else str(factor)  # as given, for messages
     density_spelling = "" if density is None else str(density)
     factor = _number("factor", factor, optional=True)
@@ -217,7 +219,8 @@ def _form(input, coefficients_only, *, size, output_shape, factor, generator, me
         clamp=_text("clamp", clamp),
         highlight_compress=_flag("highlight_compress", highlight_compress),
         threads=_threads(threads),
-        coefficients_only=coefficients_only)
+        coefficients_only=coefficients_only,
+        input_transfer=_text("input_transfer", input_transfer))
     for w in result[2]:
         _warnings.warn(w, RuntimeWarning, stacklevel=3)
     return result
@@ -230,14 +233,16 @@ def project(input: Input, *, size: Optional[Size] = None,
             lattice: str = "cartesian", density: Optional[float] = None,
             nonfinite: str = "error",
             prefilter: str = "fft", clamp: str = "none", highlight_compress: bool = False,
-            threads: int = 0) -> np.ndarray:
+            threads: int = 0, input_transfer: str = "auto") -> np.ndarray:
     """The final image of a render, as siproject forms it.
 
     input: a file path (any image OpenImageIO reads, streamed in bands as
         siproject reads it; a coefficient file is evaluated instead), or an
         array of samples (height, width[, channels]); float32 C-contiguous
-        arrays are read where they are, float16 too, other types converted
-        to float32 first.
+        arrays are read where they are, float16, uint8 and uint16 too,
+        other float types converted to float32 first. Float samples are
+        linear light; uint8 and uint16 mean what they mean in image files
+        and scikit-image (scaled to [0, 1], sRGB-encoded: decoded first).
     size: output size N, (width, height) or "WxH" (siproject's --size); or
         output_shape: (rows, cols), as scikit-image's output_shape and
         a.shape[:2] spell it; or factor: output = input / factor.
@@ -256,6 +261,9 @@ def project(input: Input, *, size: Optional[Size] = None,
     prefilter: "fft" or "recursive". clamp: "none", "zero" or "local".
     highlight_compress: compress the samples' range before projecting.
     threads: worker threads, 0 for every core; the result is the same for any.
+    input_transfer: "auto" (integer samples sRGB unless a file is tagged
+        otherwise, float linear), "srgb", "linear" or "gammaG", as
+        siproject's --input-transfer.
 
     Returns a float32 array (height, width, channels): the linear result
     siproject writes to a float EXR, bit for bit; (height, width) for an
@@ -265,7 +273,8 @@ def project(input: Input, *, size: Optional[Size] = None,
                         generator=generator, method=method, display=display,
                         boundary=boundary, lattice=lattice, density=density,
                         nonfinite=nonfinite, prefilter=prefilter, clamp=clamp,
-                        highlight_compress=highlight_compress, threads=threads)
+                        highlight_compress=highlight_compress, threads=threads,
+                        input_transfer=input_transfer)
     return image[:, :, 0] if _grey(input) else image
 
 
@@ -275,7 +284,8 @@ def coefficients(input: Input, *, size: Optional[Size] = None,
                  boundary: str = "mirror", lattice: str = "cartesian",
                  density: Optional[float] = None,
                  nonfinite: str = "error", prefilter: str = "fft",
-                 highlight_compress: bool = False, threads: int = 0) -> "Coefficients":
+                 highlight_compress: bool = False, threads: int = 0,
+                 input_transfer: str = "auto") -> "Coefficients":
     """The coefficients of the approximation, with their space.
 
     The keywords are project()'s (there is no display or clamp: those apply
@@ -287,7 +297,7 @@ def coefficients(input: Input, *, size: Optional[Size] = None,
                     generator=generator, method=method, display=None, boundary=boundary,
                     lattice=lattice, density=density, nonfinite=nonfinite,
                     prefilter=prefilter, clamp="none", highlight_compress=highlight_compress,
-                    threads=threads)
+                    threads=threads, input_transfer=input_transfer)
     return Coefficients(k, grey=_grey(input))
 
 

@@ -1,0 +1,155 @@
+"""Integer samples are display-encoded: a flat grey of 128 written by
+oiiotool or Pillow as an 8- or 16-bit TIFF, a PNG or a JPEG, or held as a
+uint8 or uint16 array, is decoded as sRGB, projected and encoded again to
+128. Arrays and files follow one rule (the library's), so an array gives the
+same image as the file that holds it; input_transfer / --input-transfer
+states another transfer."""
+
+import os
+import subprocess
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import siproject
+
+SIPROJECT = os.environ.get("SIPROJECT", "siproject")
+
+W, H = 40, 32
+GREY16 = 128 * 257  # the 16-bit code of 128 / 255
+
+
+def srgb_to_linear(v):
+    """IEC 61966-2-1, written out here (not the library's)."""
+    v = np.asarray(v, np.float64)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+LINEAR_128 = float(srgb_to_linear(128 / 255))  # 0.2158605...
+
+
+def oiiotool(*args):
+    subprocess.run(["oiiotool", *map(str, args)], check=True, capture_output=True)
+
+
+def run(*args):
+    r = subprocess.run([SIPROJECT, *map(str, args), "-q"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    return r
+
+
+@pytest.fixture(scope="module")
+def greys(tmp_path_factory):
+    """Flat 128 files by their writer and format: name -> (path, bits)."""
+    d = tmp_path_factory.mktemp("transfer")
+    files = {}
+    pattern = ["--pattern", f"constant:color={128 / 255:.10f},{128 / 255:.10f},{128 / 255:.10f}",
+               f"{W}x{H}", "3"]
+    for name, ext, bits in [("oiio8.tif", "tif", 8), ("oiio16.tif", "tif", 16),
+                            ("oiio8.png", "png", 8), ("oiio16.png", "png", 16),
+                            ("oiio8.jpg", "jpg", 8)]:
+        oiiotool(*pattern, "-d", f"uint{bits}", "-o", d / name)
+        files[name] = (d / name, bits)
+    rgb = np.full((H, W, 3), 128, np.uint8)
+    for name, fmt in [("pil8.tif", "TIFF"), ("pil8.png", "PNG"), ("pil8.jpg", "JPEG")]:
+        Image.fromarray(rgb).save(d / name, fmt, **({"quality": 95} if fmt == "JPEG" else {}))
+        files[name] = (d / name, 8)
+    # Pillow's 16-bit greyscale TIFF
+    Image.fromarray(np.full((H, W), GREY16, np.uint16)).save(d / "pil16.tif", "TIFF")
+    files["pil16.tif"] = (d / "pil16.tif", 16)
+    return d, files
+
+
+@pytest.mark.parametrize("name", ["oiio8.tif", "oiio16.tif", "oiio8.png", "oiio16.png",
+                                  "oiio8.jpg", "pil8.tif", "pil16.tif", "pil8.png", "pil8.jpg"])
+def test_flat_128_stays_128_through_siproject(greys, name):
+    d, files = greys
+    path, _ = files[name]
+    # the input holds 128 (JPEG's flat blocks included: a DC term only)
+    np.testing.assert_allclose(siproject.read_image(path), 128 / 255, rtol=1e-7)
+    out = d / (name + ".out.png")
+    run(path, "-o", out, "--factor", "2")
+    got = np.asarray(Image.open(out))
+    # Exact: the projection reproduces a constant to float rounding (1e-6
+    # relative), far inside the half code step (0.5 / 255 in encoded units)
+    # that would move the 8-bit value.
+    assert got.shape[:2] == (H // 2, W // 2)
+    assert np.all(got == 128), (name, np.unique(got))
+    # the linear result is the decoded grey
+    exr = d / (name + ".out.exr")
+    run(path, "-o", exr, "--factor", "2", "-d", "float")
+    lin = siproject.read_image(exr)
+    np.testing.assert_allclose(lin, LINEAR_128, rtol=2e-6)
+    info = subprocess.run(["oiiotool", "--info", "-v", exr], capture_output=True, text=True).stdout
+    assert 'sis:input_transfer: "srgb"' in info
+
+
+def test_input_transfer_linear_and_iscolorspace(greys):
+    d, files = greys
+    path, _ = files["oiio8.tif"]
+    for opts, want, name in [(["--input-transfer", "linear"], 128 / 255, "linear"),
+                             (["--iscolorspace", "linear"], 128 / 255, "linear"),
+                             (["--iscolorspace", "sRGB"], LINEAR_128, "srgb"),
+                             (["--input-transfer", "gamma2.2"], (128 / 255) ** 2.2, "gamma2.2")]:
+        out = d / "stated.exr"
+        run(path, "-o", out, "--factor", "2", "-d", "float", *opts)
+        np.testing.assert_allclose(siproject.read_image(out), want, rtol=2e-6)
+        info = subprocess.run(["oiiotool", "--info", "-v", out], capture_output=True,
+                              text=True).stdout
+        assert f'sis:input_transfer: "{name}"' in info
+    r = subprocess.run([SIPROJECT, path, "-o", d / "x.exr", "--factor", "2",
+                        "--input-transfer", "log"], capture_output=True, text=True)
+    assert r.returncode == 2 and "--input-transfer 'log'" in r.stderr
+    assert not (d / "x.exr").exists()
+
+
+def test_file_tags_are_followed(greys):
+    """A PNG tagged linear (gAMA 1.0) is linear; one tagged Gamma2.2 a power."""
+    d, _ = greys
+    grey = f"{128 / 255:.10f}"
+    for tag, want in [("Linear", 128 / 255), ("Gamma2.2", (128 / 255) ** 2.2)]:
+        png = d / f"tagged-{tag}.png"
+        oiiotool("--pattern", f"constant:color={grey},{grey},{grey}", f"{W}x{H}", "3",
+                 "-d", "uint8", "--attrib", "oiio:ColorSpace", tag, "-o", png)
+        out = d / "tagged.exr"
+        run(png, "-o", out, "--factor", "2", "-d", "float")
+        np.testing.assert_allclose(siproject.read_image(out), want, rtol=2e-6)
+
+
+@pytest.mark.parametrize("dtype,code,file", [(np.uint8, 128, "oiio8.png"),
+                                             (np.uint16, GREY16, "oiio16.png")])
+def test_integer_arrays_are_what_files_are(greys, dtype, code, file):
+    d, files = greys
+    a = np.full((H, W, 3), code, dtype)
+    got = siproject.project(a, factor=2)
+    # the same rule as the file that holds these samples, bit for bit
+    by_path = siproject.project(files[file][0], factor=2)
+    np.testing.assert_array_equal(got, by_path)
+    np.testing.assert_allclose(got, LINEAR_128, rtol=2e-6)
+    out = d / f"array-{np.dtype(dtype).name}.png"
+    siproject.write_image(out, got)
+    assert np.all(np.asarray(Image.open(out)) == 128)
+    # stated linear: the scaled codes themselves
+    lin = siproject.project(a, factor=2, input_transfer="linear")
+    np.testing.assert_allclose(lin, code / np.iinfo(dtype).max, rtol=2e-6)
+    k = siproject.coefficients(a, factor=2, input_transfer="linear")
+    np.testing.assert_allclose(k.resample(), lin, rtol=1e-6)
+
+
+def test_photo_array_range(greys):
+    """A Pillow RGB image as numpy holds it: the result lies in [0, 1] as the
+    file's does (the projection's overshoot aside), not in [0, 255]."""
+    d, _ = greys
+    y, x = np.mgrid[0:64, 0:64]
+    rgb = np.stack([(x * 4) % 256, (y * 4) % 256, ((x + y) * 2) % 256], -1).astype(np.uint8)
+    Image.fromarray(rgb).save(d / "photo.png")
+    a = np.asarray(Image.open(d / "photo.png"))
+    got = siproject.project(a, factor=2)
+    np.testing.assert_array_equal(got, siproject.project(d / "photo.png", factor=2))
+    assert got.min() > -0.2 and got.max() < 1.2
+
+
+def test_other_integer_arrays_refused():
+    with pytest.raises(ValueError, match="int64"):
+        siproject.project(np.full((8, 8, 3), 1, np.int64), factor=2)
