@@ -123,11 +123,12 @@ std::string value_position(long q, long width, const std::vector<std::string>& n
 
 double table_bytes(long coefficients_x, long samples_x, long coefficients_y, long samples_y,
                    double R) {
-  // an index and a weight per entry; an upsampled axis's entries also span
-  // the input model's reach (acquisition.cpp)
+  // an index and a weight per entry; an axis's entries also span the input
+  // model's reach (acquisition.cpp: 36 samples either side upsampling, 2
+  // downsampling by a factor that is not whole)
   auto axis = [&](long n, long samples) {
     const double ratio = double(samples) / double(std::max(1L, n));
-    const double entries = 2 * R * std::max(1.0, ratio) + 2 + (ratio < 1 ? 2 * 36 + 4 : 0);
+    const double entries = 2 * R * std::max(1.0, ratio) + 2 + (ratio < 1 ? 2 * 36 + 4 : 4);
     return double(n) * (entries + 2 * R + 2) * 16;
   };
   return axis(coefficients_x, samples_x) + axis(coefficients_y, samples_y);
@@ -501,6 +502,7 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
     throw RequestError("--method min-error needs a B-spline generator (box, tent, quadratic, cubic, "
                        "bspline:N), not " + generator.name() + "; use --method conventional");
   std::uint64_t coefficients = std::uint64_t(W) * std::uint64_t(H);
+  double hex_tables = 0;
   const double density = rq.space.density;
   if (hex) {
     if (!(std::isfinite(density) && density > 0)) {
@@ -532,11 +534,22 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
     }
     const HexLayout layout = hex_layout(density, double(W), double(H), hex_default_margin(rq.space.hex_order));
     coefficients = std::uint64_t(layout.columns) * std::uint64_t(layout.rows);
+    // its table grows with the input's samples per lattice cell
+    hex_tables = hex_acquisition_bytes(in.width, in.height, C, double(W), double(H), layout,
+                                       rq.space.hex_order, threads, 0, sizeof(float));
+    const std::uint64_t available = available_memory();
+    if (hex_tables > double(available))
+      throw RequestError("--lattice hex: the hexagonal acquisition of " + std::to_string(in.width) +
+                         " x " + std::to_string(in.height) + " samples onto a " + std::to_string(W) +
+                         " x " + std::to_string(H) + " output needs about " +
+                         format_bytes(std::uint64_t(hex_tables)) + " of memory, more than the " +
+                         format_bytes(available) +
+                         " available (its weight table grows with the samples per output pixel); "
+                         "ask for a larger output (--size or --factor) or use --lattice cartesian");
   }
   p.estimated_bytes = projection_bytes(W, H, C, coefficients, true, rq.coefficient_file, threads,
-                                       table_bytes(W, in.width, H, in.height,
-                                                   hex ? BoxSpline::hexagonal(rq.space.hex_order).radius()
-                                                       : generator.radius()));
+                                       hex ? hex_tables
+                                           : table_bytes(W, in.width, H, in.height, generator.radius()));
   check_memory(p.estimated_bytes, "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
                                       std::to_string(C) + " output");
 

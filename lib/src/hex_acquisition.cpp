@@ -52,13 +52,63 @@ HexAcquisitionPlan::HexAcquisitionPlan(long input_width, long input_height, int 
   init_aligned();
 }
 
+namespace {
+// The aligned grid's columns per lattice step (even) and rows per lattice
+// row, and the columns held for `columns` lattice columns of order n.
+struct AlignedSteps {
+  int s1, s2;
+  long columns;
+};
+AlignedSteps aligned_steps(double h, double hy, double dx, double dy, int n, long columns) {
+  AlignedSteps a;
+  a.s1 = std::max(2, 2 * static_cast<int>(std::lround(h / dx / 2)));
+  a.s2 = std::max(1, static_cast<int>(std::lround(hy / dy)));
+  a.columns = a.s1 * (columns - 1) + a.s1 / 2 + 2 * (n * a.s1) + 1;
+  return a;
+}
+constexpr long kHexBandRows = 256;  // as kBandRows: the bands the files are read in
+// Rows interpolated along x at once, at most: the interpolated piece stays
+// small whatever the band's strips (a row of the aligned grid can be many
+// times an input row when the frame is small against the lattice's margin).
+constexpr long kPieceRows = 16;
+}  // namespace
+
+double hex_acquisition_bytes(long input_width, long input_height, int channels,
+                             double image_width, double image_height, const HexLayout& layout,
+                             int order, int bands_at_once, long band_rows, int sample_bytes) {
+  const double dx = image_width / input_width, dy = image_height / input_height;
+  const AlignedSteps a =
+      aligned_steps(layout.step(), layout.row_step(), dx, dy, order, layout.columns);
+  const double wt = 2.0 * order * a.s1 + 1, trows = 2.0 * order * a.s2 - 1;
+  // the plan: the table and its rows' bounds; per aligned column its taps
+  // (and the first taps while they are made) and the columns' sources; per
+  // input row its boundary images (a vector each, with the allocator's
+  // overhead), the extended rows the table reaches
+  const double columns = double(a.columns);
+  const double extended_rows =
+      (layout.rows - 1 + 2.0 * order) * layout.row_step() / dy + 8;
+  const double plan = trows * (wt * 8 + 8) + columns * (8 + 32 + 8) +
+                      (columns * (layout.step() / a.s1) / dx + 8) * 8 +
+                      double(input_height) * 48 + extended_rows * 8;
+  // per band at once: a piece of interpolated rows, the band's input rows
+  // kept for deferred coefficient rows, the per-row and per-coefficient-row
+  // state, each thread's combined table row
+  const double rows = band_rows < 1 ? kHexBandRows : band_rows;
+  const double band = kPieceRows * columns * channels * sample_bytes +
+                      rows * double(input_width) * channels * sample_bytes +
+                      double(layout.rows) * 64 + wt * 8;
+  return plan + (bands_at_once < 1 ? 1 : bands_at_once) * band +
+         double(layout.rows) * 8 * (input_height / rows + 4);
+}
+
 void HexAcquisitionPlan::init_aligned() {
   AlignedGrid& g = aligned_;
   const int n = spline_->order();
   const double h = layout_.step(), hy = layout_.row_step();
   const Vec2 o = layout_.lattice.origin();
-  g.s1 = std::max(2, 2 * static_cast<int>(std::lround(h / dx_ / 2)));
-  g.s2 = std::max(1, static_cast<int>(std::lround(hy / dy_)));
+  const AlignedSteps steps = aligned_steps(h, hy, dx_, dy_, n, layout_.columns);
+  g.s1 = steps.s1;
+  g.s2 = steps.s2;
   g.half = n * g.s1;
   g.reach = n * g.s2;
   const double dxa = h / g.s1, dya = hy / g.s2;
@@ -66,7 +116,7 @@ void HexAcquisitionPlan::init_aligned() {
   // s1 i + (s1 / 2)(j mod 2) and row s2 j; the table reaches half columns and
   // reach - 1 rows around it.
   g.m0 = -g.half;
-  g.columns = g.s1 * (layout_.columns - 1) + g.s1 / 2 + 2 * g.half + 1;
+  g.columns = steps.columns;
   std::vector<long> first(g.columns);
   g.x_weight.resize(g.columns);
   long qlo = 0, qhi = -1;
@@ -110,10 +160,6 @@ void HexAcquisitionPlan::init_aligned() {
   images_.resize(hin_);
   for (long e = e0; e <= e1; ++e) images_[extend_index(e, hin_, boundary_)].push_back(e);
 }
-
-namespace {
-constexpr long kHexBandRows = 256;  // as kBandRows: the bands the files are read in
-}  // namespace
 
 HexAcquisition::HexAcquisition(const HexAcquisitionPlan& plan, int threads, long band_rows)
     : plan_(plan),
@@ -308,12 +354,21 @@ void HexAcquisition::Band::add_rows(long y0, long y1, const float* rows) { add(y
 void HexAcquisition::Band::add_rows(long y0, long y1, const double* rows) { add(y0, y1, rows); }
 
 template <typename T>
+void HexAcquisition::add_pieces(long y0, long y1, const T* rows, const std::vector<long>& js,
+                                std::vector<T>& ext, int threads) {
+  const std::size_t in_row = std::size_t(plan_.input_width()) * plan_.channels();
+  for (long y = y0; y < y1; y += kPieceRows) {
+    const long e = std::min(y1, y + kPieceRows);
+    interpolate(y, e, rows + (y - y0) * in_row, ext, threads);
+    accumulate(ext.data(), y, e, js, threads);
+  }
+}
+
+template <typename T>
 void HexAcquisition::Band::add(long y0, long y1, const T* rows) {
   if (band_ < 0 || y0 != next_row_ || y1 > whole_.bands_.end(band_) || y1 < y0)
     throw std::logic_error("HexAcquisition::Band::add_rows(): rows out of the band's order");
   if (y1 == y0) return;
-  std::vector<T>& ext = extended<T>();
-  whole_.interpolate(y0, y1, rows, ext, threads_);
   // The coefficient rows it reaches: added to now where the earlier bands
   // that reach them are done with them (decided at the band's first touch),
   // else kept for end().
@@ -330,9 +385,10 @@ void HexAcquisition::Band::add(long y0, long y1, const T* rows) {
       (state_[j] == 1 ? now : later).push_back(j);
     }
   }
-  whole_.accumulate(ext.data(), y0, y1, now, threads_);
+  if (!now.empty()) whole_.add_pieces(y0, y1, rows, now, extended<T>(), threads_);
   if (!later.empty()) {
-    // only the rows that reach them (rows between that do not add nothing)
+    // only the rows that reach them (rows between that do not add nothing),
+    // as they came: interpolated again in end()
     long a = y1, b = y0;
     for (long k = y0; k < y1; ++k)
       for (long j : whole_.reached(k, k + 1))
@@ -341,12 +397,12 @@ void HexAcquisition::Band::add(long y0, long y1, const T* rows) {
           b = std::max(b, k + 1);
           break;
         }
-    const std::size_t erow = whole_.strip_row_size();
+    const std::size_t in_row = std::size_t(whole_.plan_.input_width()) * whole_.plan_.channels();
     Kept k{a, b, {}, {}, later};
     if constexpr (std::is_same_v<T, float>)
-      k.ext_f.assign(ext.begin() + (a - y0) * erow, ext.begin() + (b - y0) * erow);
+      k.rows_f.assign(rows + (a - y0) * in_row, rows + (b - y0) * in_row);
     else
-      k.ext_d.assign(ext.begin() + (a - y0) * erow, ext.begin() + (b - y0) * erow);
+      k.rows_d.assign(rows + (a - y0) * in_row, rows + (b - y0) * in_row);
     if (b > a) kept_.push_back(std::move(k));
   }
   next_row_ = y1;
@@ -359,24 +415,23 @@ void HexAcquisition::Band::end() {
   std::vector<long> deferred;
   for (long j : touched_)
     if (state_[j] == 2) deferred.push_back(j);
+  // Each kept strip's terms go to its deferred rows once the earlier bands
+  // are done with all of them: each row still takes its terms in input row
+  // order, and each strip is interpolated once.
   for (long j : deferred) {
     const auto& rb = whole_.row_bands_[j];
     const int position = int(std::find(rb.begin(), rb.end(), band_) - rb.begin());
-    {
-      std::unique_lock<std::mutex> lock(whole_.m_);
-      // it waits on earlier bands only: one of them abandoned, it gives up
-      whole_.cv_.wait(lock, [&] { return whole_.done_[j] == position || whole_.abandoned_ < band_; });
-      if (whole_.done_[j] != position)
-        throw std::runtime_error("HexAcquisition::Band::end(): an earlier band was abandoned");
-    }
-    const std::vector<long> one{j};
-    for (const Kept& k : kept_) {
-      if (std::find(k.rows.begin(), k.rows.end(), j) == k.rows.end()) continue;
-      if (!k.ext_f.empty())
-        whole_.accumulate(k.ext_f.data(), k.y0, k.y1, one, threads_);
-      else
-        whole_.accumulate(k.ext_d.data(), k.y0, k.y1, one, threads_);
-    }
+    std::unique_lock<std::mutex> lock(whole_.m_);
+    // it waits on earlier bands only: one of them abandoned, it gives up
+    whole_.cv_.wait(lock, [&] { return whole_.done_[j] == position || whole_.abandoned_ < band_; });
+    if (whole_.done_[j] != position)
+      throw std::runtime_error("HexAcquisition::Band::end(): an earlier band was abandoned");
+  }
+  for (const Kept& k : kept_) {
+    if (!k.rows_f.empty())
+      whole_.add_pieces(k.y0, k.y1, k.rows_f.data(), k.rows, ext_f_, threads_);
+    else
+      whole_.add_pieces(k.y0, k.y1, k.rows_d.data(), k.rows, ext_d_, threads_);
   }
   {
     std::lock_guard<std::mutex> lock(whole_.m_);

@@ -151,12 +151,12 @@ class HexAcquisition {
     std::vector<char> state_;                // per coefficient row: 0 untouched, 1 adding, 2 deferred
     struct Kept {                            // rows kept for the deferred coefficient rows
       long y0, y1;
-      std::vector<float> ext_f;              // interpolated along x, in the rows' own type (float
-      std::vector<double> ext_d;             // or double)
+      std::vector<float> rows_f;             // the input rows as added, in their own type (float
+      std::vector<double> rows_d;            // or double)
       std::vector<long> rows;                // the deferred coefficient rows they reach
     };
     std::vector<Kept> kept_;
-    // the current strip, interpolated along x, in the rows' own type
+    // the current piece of rows, interpolated along x, in the rows' own type
     std::vector<float> ext_f_;
     std::vector<double> ext_d_;
     template <typename T>
@@ -202,7 +202,23 @@ class HexAcquisition {
   // Adds the terms of the interpolated rows [y0, y1) to the coefficient rows js.
   template <typename S>
   void accumulate(const S* ext, long y0, long y1, const std::vector<long>& js, int threads);
+  // Input rows [y0, y1) interpolated and added to the coefficient rows js a
+  // few rows at a time (into ext), in increasing row order.
+  template <typename T>
+  void add_pieces(long y0, long y1, const T* rows, const std::vector<long>& js, std::vector<T>& ext,
+                  int threads);
 };
+
+// The bytes a HexAcquisition of these sizes allocates besides its
+// coefficients, at most, from the sizes alone (before anything is
+// allocated): its plan (the table, (2 n s2 - 1)(2 n s1 + 1) weights, grows
+// with the input's samples per lattice cell; the column taps; the rows'
+// boundary images) and, per band taken at once, a piece of interpolated
+// rows and the band's input rows kept for deferred coefficient rows, in
+// samples of sample_bytes. band_rows < 1: the default bands.
+double hex_acquisition_bytes(long input_width, long input_height, int channels,
+                             double image_width, double image_height, const HexLayout& layout,
+                             int order, int bands_at_once, long band_rows, int sample_bytes);
 
 // Convenience: acquires a whole in-memory image.
 Coefficients acquire(const Image& input, const HexAcquisitionPlan& plan, int threads = 1);
