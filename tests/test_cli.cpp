@@ -269,6 +269,8 @@ TEST_F(Cli, FrameSequencesRefuseWhatTheyCannotDo) {
        path("in/f.0004.exr") + ": no such file (frame 4 of " + path("in/f.1-4#.exr") + ")"},
       {"--frames 2-5 " + path("in/f.#.exr") + " -o " + path("out/"), 3, "f.0004.exr: no such file (frame 4"},
       {path("in/g.#.exr") + " -o " + path("out/"), 3, "g.#.exr: no file matches the frame pattern"},
+      {path("in/f.0001.exr") + " " + path("in/f.0009.exr") + " -o " + path("out/"), 3,
+       path("in/f.0009.exr") + ": no such file"},
       // several frames, one output file
       {path("in/f.#.exr") + " -o " + path("out/one.exr"), 2,
        "3 input frames and one output file " + path("out/one.exr") + ": give -o a folder"},
