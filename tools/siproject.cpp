@@ -446,7 +446,7 @@ int run_jobs(const Options& o) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   Options o;
   CLI::App app{
       "siproject: form a final image from a supersampled render by projection onto a\n"
@@ -575,4 +575,7 @@ int main(int argc, char** argv) {
     std::cerr << "siproject: " << e.what() << "\n";
     return 1;
   }
+} catch (const std::bad_alloc&) {  // the options' own allocations
+  std::cerr << "siproject: out of memory\n";
+  return 1;
 }
