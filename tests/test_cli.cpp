@@ -269,6 +269,8 @@ TEST_F(Cli, FrameSequencesRefuseWhatTheyCannotDo) {
        path("in/f.0004.exr") + ": no such file (frame 4 of " + path("in/f.1-4#.exr") + ")"},
       {"--frames 2-5 " + path("in/f.#.exr") + " -o " + path("out/"), 3, "f.0004.exr: no such file (frame 4"},
       {path("in/g.#.exr") + " -o " + path("out/"), 3, "g.#.exr: no file matches the frame pattern"},
+      {path("in/f.0001.exr") + " " + path("in/f.0009.exr") + " -o " + path("out/"), 3,
+       path("in/f.0009.exr") + ": no such file"},
       // several frames, one output file
       {path("in/f.#.exr") + " -o " + path("out/one.exr"), 2,
        "3 input frames and one output file " + path("out/one.exr") + ": give -o a folder"},
@@ -362,6 +364,53 @@ TEST_F(Cli, EveryToolReportsRunningOutOfMemory) {
   r = shell("ulimit -v 1000000; " + std::string(SIMETRICS) + " " + big);
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_TRUE(contains(r.output, "simetrics: out of memory")) << r.output;
+}
+
+TEST_F(Cli, SiprojectReportsRunningOutOfMemoryAtEveryLimit) {
+  // siproject's memory check refuses a request the limit cannot hold (status
+  // 2, naming what it needs); below that, from the start-up floor of its
+  // libraries, each allocation that fails is out of memory (status 1), or the
+  // input's reader saying it could not allocate (status 3), never an abort, a
+  // crash, or another error's message ("no writer for this name's format").
+  ASSERT_EQ(run_tool("oiiotool", "--pattern constant:color=0.5,0.5,0.5 2000x2000 3 -d half -o " +
+                                     path("in.exr")).status, 0);
+  const auto limited = [&](long kb, const std::string& args) {
+    return shell("ulimit -v " + std::to_string(kb) + "; exec " + std::string(SIPROJECT) + " " + args);
+  };
+  // the floor: the least limit (in MB steps) at which siproject reaches main
+  // (below, the loader cannot map its libraries, or OpenImageIO's static
+  // initialisers fail); from there --version prints or runs out of memory
+  const auto started = [&](long kb) {
+    const Result r = limited(kb, "--version");
+    return r.status == 0 || (r.status == 1 && contains(r.output, "siproject: out of memory"));
+  };
+  long lo = 1 << 10, hi = 4 << 20;  // KB
+  ASSERT_TRUE(started(hi));
+  while (hi - lo > 1 << 10) {
+    const long mid = (lo + hi) / 2;
+    (started(mid) ? hi : lo) = mid;
+  }
+  const std::string args = path("in.exr") + " -o " + path("o.exr") + " --factor 4 --threads 2";
+  std::set<int> seen;
+  for (long kb = hi; kb < hi + (64 << 10); kb += 1 << 10) {
+    const Result r = limited(kb, args);
+    seen.insert(r.status);
+    const std::string at = std::to_string(kb) + " KB: ";
+    EXPECT_TRUE(r.status == 1 || r.status == 2 || r.status == 3) << at << r.status << " " << r.output;
+    if (r.status == 1) {
+      EXPECT_TRUE(contains(r.output, "siproject: out of memory")) << at << r.output;
+    }
+    if (r.status == 3) {
+      EXPECT_TRUE(contains(r.output, "bad_alloc") || contains(r.output, "allocate memory")) << at << r.output;
+    }
+    if (r.status == 2) {
+      EXPECT_TRUE(contains(r.output, "the request needs about")) << at << r.output;
+      break;  // the memory check is reached: every larger limit reaches it
+    }
+    EXPECT_FALSE(fs::exists(path("o.exr"))) << at;
+  }
+  EXPECT_TRUE(seen.count(1)) << "no limit ran out of memory past the floor";
+  EXPECT_TRUE(seen.count(2)) << "no limit reached the memory check";
 }
 
 TEST(Docs, EveryOptionOfSiprojectIsDocumented) {

@@ -493,7 +493,8 @@ TEST_F(Faults, AbsurdOptionsAreRefusedAtOnce) {
       {"--factor nan", "--factor"},
       {"--factor inf", "--factor"},
       {"--size 3000000000x2", "--size"},
-      {"--size 0x5", "--size"},
+      {"--size 0x0", "--size"},
+      {"--size 0.001%", "--size"},
   };
   for (const auto& [args, name] : cases) {
     const auto t = std::chrono::steady_clock::now();

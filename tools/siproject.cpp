@@ -270,7 +270,6 @@ int run(const Options& o) {
   return 0;
 }
 
-
 // One projection of a batch: its inputs (one image, or the row bands of
 // one), its outputs.
 struct Job {
@@ -310,7 +309,6 @@ Target target_of(const std::string& path, const std::string& option, int framepa
 struct Frame {
   std::string path;
   std::optional<long> number;
-  std::string pattern;  // the pattern it came from ("": none)
 };
 
 // The inputs as frames: patterns expanded (their range, --frames, or the
@@ -337,7 +335,9 @@ std::vector<Frame> expand_inputs(const Options& o) {
       }
     }
     if (!p) {
-      frames.push_back({in, std::nullopt, ""});
+      if (o.inputs.size() > 1 && !fs::exists(fs::symlink_status(in, ec)))
+        throw InputError(in + ": no such file");  // before any frame runs
+      frames.push_back({in, std::nullopt});
       continue;
     }
     any_pattern = true;
@@ -357,7 +357,7 @@ std::vector<Frame> expand_inputs(const Options& o) {
       std::error_code e2;
       if (!fs::exists(name, e2))
         throw InputError(name + ": no such file (frame " + std::to_string(n) + " of " + in + ")");
-      frames.push_back({name, n, in});
+      frames.push_back({name, n});
     }
   }
   if (!o.frames.empty() && !any_pattern)
@@ -447,7 +447,7 @@ int run_jobs(const Options& o) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   Options o;
   CLI::App app{
       "siproject: form a final image from a supersampled render by projection onto a\n"
@@ -587,4 +587,7 @@ int main(int argc, char** argv) {
     std::cerr << "siproject: " << e.what() << "\n";
     return 1;
   }
+} catch (const std::bad_alloc&) {  // the options' own allocations
+  std::cerr << "siproject: out of memory\n";
+  return 1;
 }

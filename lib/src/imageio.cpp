@@ -707,8 +707,13 @@ void check_output(const std::string& path) {
   if (lower_extension(path) == ".ico")
     throw OutputError(path + ": ICO output is not supported (OpenImageIO 2.4 writes ICO files "
                       "it cannot read back)");
-  if (!ImageOutput::create(path))
-    throw OutputError(path + ": no writer for this name's format (" + OIIO::geterror() + ")");
+  if (!ImageOutput::create(path)) {
+    const std::string why = OIIO::geterror();
+    // OpenImageIO swallows what a writer's constructor throws: no writer and
+    // no reason is the allocation that failed
+    if (why.empty()) throw std::bad_alloc();
+    throw OutputError(path + ": no writer for this name's format (" + why + ")");
+  }
 }
 
 float srgb_to_linear(float v) {
@@ -785,7 +790,11 @@ StagedFile stage(const std::string& path, const ImageSpec& spec, TypeDesc data_t
                  const void* data) {
   check_output(path);
   auto out = ImageOutput::create(path);
-  if (!out) throw OutputError(path + ": cannot write this format: " + OIIO::geterror());
+  if (!out) {
+    const std::string why = OIIO::geterror();
+    if (why.empty()) throw std::bad_alloc();  // as in check_output
+    throw OutputError(path + ": cannot write this format: " + why);
+  }
   StagedFile file(path);
   // Writers that take a proxy write through the checked descriptor; the few
   // that do not (HEIF, SGI, FITS...), and TIFF (OpenImageIO 2.4's TIFF writer

@@ -313,3 +313,26 @@ def test_srgb8_is_what_an_8bit_file_holds(tmp_path):
     siproject.write_image(png, img)
     held = np.asarray(Image.open(png))
     assert np.array_equal(siproject.srgb8(img), held)
+
+
+@pytest.mark.parametrize("size,shape", [
+    ("50%", (40, 48)), ("48", (40, 48)), ("48x0", (40, 48)), ("0x40", (40, 48)), ("25%x50%", (40, 24)),
+])
+def test_size_strings_as_siproject_spells_them(files, size, shape):
+    # the same parser as siproject's --size: oiiotool's spellings, the same images
+    out = files["dir"] / "size.exr"
+    a = siproject.project(files["float"], size=size)
+    assert a.shape == shape + (3,)
+    run_siproject(files["float"], "-o", out, "--size", size, "-d", "float")
+    assert np.array_equal(a, siproject.read_image(out))
+
+
+@pytest.mark.parametrize("alias,canonical", [
+    (dict(generator="triangle"), dict(generator="tent")),
+    (dict(display="center"), dict(display="centred")),
+    (dict(display="centre"), dict(display="centred")),
+    (dict(lattice="hexagonal"), dict(lattice="hex")),
+])
+def test_name_aliases_give_the_canonical_names_images(files, alias, canonical):
+    assert np.array_equal(siproject.project(files["float"], factor=4, **alias),
+                          siproject.project(files["float"], factor=4, **canonical))
