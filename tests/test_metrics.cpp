@@ -510,3 +510,42 @@ TEST(Metrics, OvershootMatchesBruteForce) {
       EXPECT_GT(ref.pixels_out_of_range, 0) << what;  // the test sees something
     }
 }
+
+// A NaN or an infinity in any image or number a measure is given is refused
+// (a NaN scored as a perfect 0 before: every comparison with it is false),
+// and so is an overshoot neighbourhood past the output's larger side (its
+// window indices overflowed, and the search never ended).
+TEST(Metrics, NonFiniteArgumentsAreRefused) {
+  const Image in = random_image(32, 24, 2, 41);
+  const Coefficients k = project_with(in, 8, 6, 3);
+  Image bad = in;
+  bad.at(5, 3, 1) = std::numeric_limits<float>::quiet_NaN();
+  Image out = random_image(8, 6, 2, 42);
+  Image worse = out;
+  worse.at(2, 1, 0) = std::numeric_limits<float>::infinity();
+  auto refused = [](const std::function<void()>& f, const std::string& part) {
+    try {
+      f();
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+      return;
+    }
+    ADD_FAILURE() << "not refused: " << part;
+  };
+  refused([&] { l2_error(k, bad); }, "l2_error(): non-finite value (NaN or Inf) in the reference at x 5, y 3, channel 1");
+  refused([&] { L2Reference r(bad); }, "in the reference at x 5, y 3");
+  refused([&] { zoneplate_l2_error(k, std::nan(""), 8); }, "l2_error(): the zone plate's K nan is not finite");
+  refused([&] { zoneplate_l2_error(k, 40, 2000); }, "samples_per_pixel 2000: expected 1 to 1024");
+  refused([&] { l2_error(k, [](double, double, int) { return std::nan(""); }, 4); },
+          "l2_error(): the error is not finite");
+  refused([&] { rms_difference(out, worse); }, "rms_difference(): non-finite value (NaN or Inf) in the second image at x 2, y 1");
+  refused([&] { psnr(worse, out); }, "in the first image at x 2, y 1");
+  refused([&] { overshoot(worse, in); }, "overshoot(): non-finite value (NaN or Inf) in the output at x 2, y 1");
+  refused([&] { overshoot(out, bad); }, "overshoot(): non-finite value (NaN or Inf) in the input at x 5, y 3");
+  OvershootOptions far;
+  far.neighbourhood = 1e19;
+  refused([&] { overshoot(out, in, far); }, "overshoot(): neighbourhood 1e+19 output pixels: at most 8");
+  far.neighbourhood = 8;  // the largest taken: every window the whole input
+  const OvershootReport whole = overshoot(out, in, far);
+  EXPECT_EQ(whole.pixels, 48);
+}
