@@ -681,6 +681,8 @@ constexpr WriterLimits kWriters[] = {
     {"iff", "IFF", kRgbRgba, 8192, 1, true},
     {"zfile", "Zfile", 0x02, 32767, 1, true},
     {"sgi", "SGI", 0, 65534, 1, true},
+    {"rla", "RLA", 0, 32768, 1, true},
+    {"heif", "HEIF", kRgbRgba, 0, 1, true},
 };
 
 std::string counts(unsigned mask) {

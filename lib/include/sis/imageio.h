@@ -223,9 +223,10 @@ void check_output(const std::string& path);
 // Refuses an image the output's format cannot hold as write_image writes
 // it (OpenImageIO 2.4's writers, measured): a channel count (DPX 1, 3 or 4;
 // PNG, Targa and FITS 1 to 4; JPEG and PNM 1 or 3; BMP 1, 3 or 4; GIF,
-// WebP and IFF 3 or 4; Radiance HDR 3; Zfile 1), a side past the format's
-// largest (JPEG 65500, WebP 16383, IFF 8192, Zfile 32767, SGI 65534, GIF
-// and Targa 65535, PNG 1000000, FITS 999999; 0: not known yet), one row
+// WebP, IFF and HEIF 3 or 4; Radiance HDR 3; Zfile 1), a side past the
+// format's largest (JPEG 65500, WebP 16383, IFF 8192, Zfile 32767, RLA
+// 32768, SGI 65534, GIF and Targa 65535, PNG 1000000, FITS 999999; 0: not
+// known yet), one row
 // (FITS), half samples (FITS). Past these a writer aborts the process,
 // hangs, writes another image or fails. Throws OutputError naming the
 // file, the format, what it holds and what was asked. write_image checks
