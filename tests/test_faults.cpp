@@ -13,7 +13,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <map>
+#include <set>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -838,4 +841,98 @@ TEST_F(Faults, BandFilesReplacedDuringARunAreInputErrors) {
   }
   // the file as first opened is read as always
   EXPECT_NO_THROW(load_coefficients(path("c.exr"), false, nullptr, ImageReader(path("c.exr")).signature()));
+}
+
+TEST_F(Faults, OutputsTheirFormatCannotHoldAreRefusedBeforeAnyWork) {
+  // OpenImageIO 2.4's DPX writer aborts the process on 2 or 5+ channels
+  // (leaving the staged file), its JPEG writer writes 2 channels as 3 and
+  // hangs past 65500 pixels a side, and others fail once the work is done:
+  // each count a format does not hold is a usage error naming the output
+  // and the count, before any work; nothing written, nothing left.
+  for (int c = 1; c <= 6; ++c) {
+    Image img = random_image(24, 20, c, 40 + c);
+    write_exr(path("in" + std::to_string(c) + ".exr"), img, true);
+  }
+  const std::map<std::string, std::set<int>> held = {
+      {"dpx", {1, 3, 4}}, {"png", {1, 2, 3, 4}}, {"jpg", {1, 3}}, {"bmp", {1, 3, 4}},
+      {"tga", {1, 2, 3, 4}}, {"ppm", {1, 3}}, {"gif", {3, 4}}, {"webp", {3, 4}},
+      {"hdr", {3}}, {"fits", {1, 2, 3, 4}}, {"iff", {3, 4}}, {"tif", {1, 2, 3, 4, 5, 6}},
+      {"exr", {1, 2, 3, 4, 5, 6}}, {"sgi", {1, 2, 3, 4, 5, 6}}};
+  for (const auto& [ext, counts] : held) {
+    for (int c = 1; c <= 6; ++c) {
+      SCOPED_TRACE(ext + ", " + std::to_string(c) + " channels");
+      const std::string out = path("o." + ext);
+      const Result r = shell("timeout 60 " + std::string(SIPROJECT) + " " +
+                             path("in" + std::to_string(c) + ".exr") + " -o " + out +
+                             " --factor 2 -q");
+      if (counts.count(c)) {
+        EXPECT_EQ(r.status, 0) << r.output;
+        EXPECT_GE(ImageReader(out).channels(), c);
+        fs::remove(out);
+      } else {
+        EXPECT_EQ(r.status, 2) << r.output;
+        EXPECT_NE(r.output.find("-o " + out + ": "), std::string::npos) << r.output;
+        EXPECT_NE(r.output.find("channels, not " + std::to_string(c)), std::string::npos) << r.output;
+        EXPECT_FALSE(fs::exists(out));
+      }
+      EXPECT_TRUE(staged(dir_).empty());
+    }
+  }
+  // the library refuses them too (the module's write_image): a JPEG wider
+  // than 65500 pixels (it hung), a FITS of one row (another image), half FITS
+  const std::pair<std::string, std::string> library[] = {
+      {"wide.jpg", "JPEG output holds images up to 65500 pixels a side, not 65501 x 1"},
+      {"row.fits", "FITS output needs at least 2 rows, not 1"},
+  };
+  for (const auto& [name, message] : library) {
+    try {
+      write_image(path(name), Image(name == "wide.jpg" ? 65501 : 8, 1, 3));
+      ADD_FAILURE() << name;
+    } catch (const OutputError& e) {
+      EXPECT_EQ(std::string(e.what()), path(name) + ": " + message);
+    }
+    EXPECT_FALSE(fs::exists(path(name)));
+  }
+  EXPECT_THROW(write_image(path("h.fits"), Image(8, 8, 3), {}, {}, -1, SampleFormat::Half), OutputError);
+  // a half input to FITS is written float (half FITS did not read back: exit
+  // 4 after the work); -d half with FITS is a usage error at once
+  Result r = run(path("in3.exr") + " -o " + path("o.fits") + " --factor 2 -q");
+  EXPECT_EQ(r.status, 0) << r.output;
+  r = run(path("in3.exr") + " -o " + path("h.fits") + " --factor 2 -d half");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("-d/--data-format half: " + path("h.fits")), std::string::npos) << r.output;
+  // formats whose writers make no image that reads back, or no file
+  for (const std::string ext : {"jp2", "term", "null"}) {
+    r = run(path("in3.exr") + " -o " + path("o." + ext) + " --factor 2");
+    EXPECT_EQ(r.status, 4) << r.output;
+    EXPECT_NE(r.output.find(path("o." + ext) + ": "), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(path("o." + ext)));
+  }
+  EXPECT_TRUE(staged(dir_).empty());
+}
+
+TEST_F(Faults, CoefficientFilesOnlyWhereTheirMetadataAndSignsSurvive) {
+  // --coeffs k.hdr and k.fits reported success with no metadata and the
+  // negative coefficients clamped to 0: every format but OpenEXR is a usage
+  // error naming the option, before any work, and the library refuses them.
+  write_exr(path("in.exr"), random_image(64, 48, 3, 2), false);
+  for (const std::string ext : {"hdr", "fits", "tif", "png", "sgi", "dpx"}) {
+    const std::string k = path("k." + ext);
+    const Result r = run(path("in.exr") + " -o " + path("o.exr") + " --factor 4 --coeffs " + k);
+    EXPECT_EQ(r.status, 2) << ext << ": " << r.output;
+    EXPECT_NE(r.output.find("--coeffs " + k + ": coefficient files are OpenEXR"), std::string::npos)
+        << r.output;
+    EXPECT_FALSE(fs::exists(k)) << ext;
+    EXPECT_FALSE(fs::exists(path("o.exr"))) << ext;
+  }
+  Coefficients c;
+  c.c = Grid<double>(4, 4, 1);
+  EXPECT_THROW(write_coefficients(path("k.hdr"), c), OutputError);
+  EXPECT_FALSE(fs::exists(path("k.hdr")));
+  // an OpenEXR one under another of its names keeps its keys and signs
+  const Result r = run(path("in.exr") + " -o " + path("o.exr") + " --factor 4 -q --coeffs " + path("k.sxr"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Coefficients back = load_coefficients(path("k.sxr"), false);
+  EXPECT_TRUE(std::any_of(back.c.data.begin(), back.c.data.end(), [](double v) { return v < 0; }));
+  EXPECT_TRUE(staged(dir_).empty());
 }

@@ -126,14 +126,17 @@ int run(const Options& o) {
     if (is_8bit_format(o.output))
       throw UsageError("-d/--data-format " + o.data_format + ": " + o.output +
                        " is an 8-bit format; the sample format applies to EXR and other float outputs");
+    if (*data_format == SampleFormat::Half && !holds_half(o.output))
+      throw UsageError("-d/--data-format half: " + o.output + "'s format holds float samples, not half");
   }
   if (!o.coeffs.empty() && same_file(o.output, o.coeffs))
     throw UsageError("--coeffs " + o.coeffs + " is the output file");
   for (const std::string& path : {o.output, o.coeffs}) {
     if (path.empty()) continue;
     check_output(path);
-    if (!o.coeffs.empty() && path == o.coeffs && is_8bit_format(path))
-      throw UsageError("--coeffs " + path + ": coefficient files are float EXR");
+    if (!o.coeffs.empty() && path == o.coeffs && !holds_coefficients(path))
+      throw UsageError("--coeffs " + path + ": coefficient files are OpenEXR (.exr); this format "
+                       "cannot hold their metadata and signed float coefficients");
   }
 
   // Several inputs (--bands) are row bands of one image: each band's data
@@ -153,6 +156,11 @@ int run(const Options& o) {
                    r->path().c_str());
   }
   const int C = set.channels;
+  try {
+    check_output_image(o.output, C);
+  } catch (const OutputError& e) {
+    throw UsageError(std::string("-o ") + e.what());
+  }
   const std::vector<std::string> names = set.channel_names;
   const std::string input_label = set.label;
   const long win = set.width, hin = set.height;
@@ -172,7 +180,8 @@ int run(const Options& o) {
   const Clamp clamp = r.clamp;
   // Output samples as the input's (oiiotool's habit): half when every input
   // stores half, float otherwise; a coefficient file records its input's.
-  SampleFormat out_format = input_half ? SampleFormat::Half : SampleFormat::Float;
+  SampleFormat out_format =
+      input_half && holds_half(o.output) ? SampleFormat::Half : SampleFormat::Float;
   if (data_format) out_format = *data_format;
   const Display& shown = f.display;
   Image& image = f.final.image;

@@ -694,6 +694,7 @@ bool is_8bit_format(const std::string& path) {
 }
 
 void check_output(const std::string& path) {
+  check_path(path, true);
   const fs::path p(path);
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
   std::error_code ec;
@@ -707,13 +708,98 @@ void check_output(const std::string& path) {
   if (lower_extension(path) == ".ico")
     throw OutputError(path + ": ICO output is not supported (OpenImageIO 2.4 writes ICO files "
                       "it cannot read back)");
-  if (!ImageOutput::create(path)) {
+  auto out = ImageOutput::create(path);
+  if (!out) {
     const std::string why = OIIO::geterror();
     // OpenImageIO swallows what a writer's constructor throws: no writer and
     // no reason is the allocation that failed
     if (why.empty()) throw std::bad_alloc();
     throw OutputError(path + ": no writer for this name's format (" + why + ")");
   }
+  const std::string format = out->format_name();
+  if (format == "jpeg2000")
+    throw OutputError(path + ": JPEG 2000 output is not supported (OpenImageIO 2.4's writer here "
+                      "makes files without their start marker, that do not read back)");
+  if (format == "term" || format == "null")
+    throw OutputError(path + ": the " + format + " writer makes no image file");
+}
+
+namespace {
+// What OpenImageIO 2.4's writers hold, measured writer by writer (1 to 6
+// channels, sides up to 2^21, half and float samples, each read back).
+// Past these, some end the process (DPX asserts on 2 or 5+ channels),
+// hang (JPEG past 65500 pixels a side), write another image (JPEG: 2
+// channels as 3, 4+ as 3; GIF past 65535; FITS: 5+ channels, one row) or
+// fail once the work is done.
+struct WriterLimits {
+  const char* format;  // OpenImageIO's name
+  const char* name;    // as messages name it
+  unsigned channels;   // bit c: c channels held (0: any count)
+  long max_side;       // 0: none found
+  long min_height;
+  bool half;           // half samples read back
+};
+constexpr unsigned kOneToFour = 0x1e, kGreyRgbRgba = 0x1a, kRgbRgba = 0x18;
+constexpr WriterLimits kWriters[] = {
+    {"dpx", "DPX", kGreyRgbRgba, 0, 1, true},
+    {"png", "PNG", kOneToFour, 1000000, 1, true},
+    {"jpeg", "JPEG", 0x0a, 65500, 1, true},
+    {"bmp", "BMP", kGreyRgbRgba, 0, 1, true},
+    {"targa", "Targa", kOneToFour, 65535, 1, true},
+    {"pnm", "PNM", 0x0a, 0, 1, true},
+    {"gif", "GIF", kRgbRgba, 65535, 1, true},
+    {"webp", "WebP", kRgbRgba, 16383, 1, true},
+    {"hdr", "Radiance HDR", 0x08, 0, 1, true},
+    {"fits", "FITS", kOneToFour, 999999, 2, false},
+    {"iff", "IFF", kRgbRgba, 8192, 1, true},
+    {"zfile", "Zfile", 0x02, 32767, 1, true},
+    {"sgi", "SGI", 0, 65534, 1, true},
+    {"rla", "RLA", 0, 32768, 1, true},
+    {"heif", "HEIF", kRgbRgba, 0, 1, true},
+};
+
+std::string counts(unsigned mask) {
+  std::vector<int> c;
+  for (int n = 1; n < 32; ++n)
+    if (mask >> n & 1) c.push_back(n);
+  if (c.size() > 2 && c.back() - c.front() + 1 == int(c.size()))
+    return std::to_string(c.front()) + " to " + std::to_string(c.back());
+  std::string s;
+  for (std::size_t i = 0; i < c.size(); ++i)
+    s += (i == 0 ? "" : i + 1 == c.size() ? " or " : ", ") + std::to_string(c[i]);
+  return s;
+}
+}  // namespace
+
+void check_output_image(const std::string& path, int channels, long width, long height,
+                        bool half) {
+  check_path(path, true);
+  auto out = ImageOutput::create(path);
+  if (!out) return;  // check_output's refusal
+  const std::string format = out->format_name();
+  for (const WriterLimits& l : kWriters) {
+    if (format != l.format) continue;
+    if (l.channels && (channels < 1 || channels > 31 || !(l.channels >> channels & 1)))
+      throw OutputError(path + ": " + l.name + " output holds " + counts(l.channels) +
+                        " channels, not " + std::to_string(channels));
+    if (l.max_side && (width > l.max_side || height > l.max_side))
+      throw OutputError(path + ": " + l.name + " output holds images up to " +
+                        std::to_string(l.max_side) + " pixels a side, not " +
+                        std::to_string(width) + " x " + std::to_string(height));
+    if (height > 0 && height < l.min_height)
+      throw OutputError(path + ": " + l.name + " output needs at least " +
+                        std::to_string(l.min_height) + " rows, not " + std::to_string(height));
+    if (half && !l.half)
+      throw OutputError(path + ": " + l.name + " output holds float samples, not half");
+  }
+}
+
+bool holds_half(const std::string& path) {
+  auto out = ImageOutput::create(path);
+  if (!out) return false;
+  for (const WriterLimits& l : kWriters)
+    if (out->format_name() == std::string(l.format)) return l.half;
+  return true;
 }
 
 float srgb_to_linear(float v) {
@@ -789,6 +875,7 @@ class CheckedFile : public OIIO::Filesystem::IOProxy {
 StagedFile stage(const std::string& path, const ImageSpec& spec, TypeDesc data_type,
                  const void* data) {
   check_output(path);
+  check_output_image(path, spec.nchannels, spec.width, spec.height, spec.format == TypeDesc::HALF);
   auto out = ImageOutput::create(path);
   if (!out) {
     const std::string why = OIIO::geterror();
@@ -888,11 +975,19 @@ void write_coefficients(const std::string& path, const Coefficients& k,
   stage_coefficients(path, k, channel_names, extra).commit();
 }
 
+bool holds_coefficients(const std::string& path) {
+  if (path.find('\0') != std::string::npos) return false;
+  auto out = ImageOutput::create(path);
+  return out && out->format_name() == std::string("openexr");
+}
+
 StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
                               const std::vector<std::string>& channel_names,
                               const Metadata& extra) {
-  if (is_8bit_format(path))
-    throw OutputError(path + ": coefficient files must be float EXR, not an 8-bit format");
+  check_path(path, true);
+  if (!holds_coefficients(path))
+    throw OutputError(path + ": coefficient files are OpenEXR (.exr); this format cannot hold "
+                      "their metadata and signed float coefficients");
   Image grid(k.c.width, k.c.height, k.c.channels);
   for (std::size_t q = 0; q < grid.data.size(); ++q) grid.data[q] = static_cast<float>(k.c.data[q]);
   auto num = [](double v) {

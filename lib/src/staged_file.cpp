@@ -81,6 +81,7 @@ class SignalsHeld {
 }  // namespace
 
 StagedFile::StagedFile(const std::string& target) : target_(target) {
+  check_path(target, true);
   const fs::path t(target);
   const fs::path dir = t.has_parent_path() ? t.parent_path() : fs::path(".");
   std::error_code ec;

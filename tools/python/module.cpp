@@ -339,7 +339,9 @@ void save_to(const PyCoefficients& c, const std::string& path) {
   translated(false, [&] {
     check_output(path);
     StagedFileSignals cleanup;  // SIGTERM, SIGHUP... remove the staged file
-    if (is_8bit_format(path)) throw RequestError("--coeffs " + path + ": coefficient files are float EXR");
+    if (!holds_coefficients(path))
+      throw RequestError("--coeffs " + path + ": coefficient files are OpenEXR (.exr); this format "
+                         "cannot hold their metadata and signed float coefficients");
     stage_coefficients(path, c.k, c.channel_names,
                        {{"sis:input", c.label},
                         {"sis:input_format", c.input_half ? "half" : "float"},

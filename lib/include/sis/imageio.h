@@ -243,11 +243,28 @@ StagedFile stage_image(const std::string& path, const Image& image,
 bool is_8bit_format(const std::string& path);
 
 // Refuses, before any work, an output write_image could not make: no
-// writer for its name (or ICO, whose writer in OpenImageIO 2.4 makes files
-// it cannot read back), its folder missing, the name an existing folder or
+// writer for its name (or ICO and JPEG 2000, whose writers in OpenImageIO
+// 2.4 make files it cannot read back, or the term and null writers, which
+// make no file), a NUL in its name, its folder missing, the name an existing folder or
 // a file that is not a regular file or a link (a FIFO, a device: a finished
 // file renamed onto it would replace it). Throws OutputError naming it.
 void check_output(const std::string& path);
+
+// Refuses an image the output's format cannot hold as write_image writes
+// it (OpenImageIO 2.4's writers, measured): a channel count (DPX 1, 3 or 4;
+// PNG, Targa and FITS 1 to 4; JPEG and PNM 1 or 3; BMP 1, 3 or 4; GIF,
+// WebP, IFF and HEIF 3 or 4; Radiance HDR 3; Zfile 1), a side past the
+// format's largest (JPEG 65500, WebP 16383, IFF 8192, Zfile 32767, RLA
+// 32768, SGI 65534, GIF and Targa 65535, PNG 1000000, FITS 999999; 0: not
+// known yet), one row
+// (FITS), half samples (FITS). Past these a writer aborts the process,
+// hangs, writes another image or fails. Throws OutputError naming the
+// file, the format, what it holds and what was asked. write_image checks
+// it first; a front end calls it as soon as it knows the channels.
+void check_output_image(const std::string& path, int channels, long width = 0, long height = 0,
+                        bool half = false);
+// True when the output's format holds half samples (not FITS).
+bool holds_half(const std::string& path);
 
 // The sRGB transfer functions (IEC 61966-2-1), on [0, 1] (outside, the
 // encoder clamps; the decoder extends the curve's ends as they are).
@@ -262,6 +279,11 @@ void write_coefficients(const std::string& path, const Coefficients& k,
 StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
                               const std::vector<std::string>& channel_names = {},
                               const Metadata& extra = {});
+// True for names whose writer is OpenImageIO's OpenEXR writer (.exr, .sxr,
+// .mxr): the one format that keeps a coefficient file's string metadata and
+// its signed float samples (Radiance HDR, FITS, TIFF, PNG... drop the keys
+// or clamp negatives). stage_coefficients refuses the others (OutputError).
+bool holds_coefficients(const std::string& path);
 bool is_coefficient_file(const ImageReader& reader);
 Coefficients read_coefficients(ImageReader& reader);
 
