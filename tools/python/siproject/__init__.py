@@ -315,8 +315,6 @@ def _path(name: str, path) -> str:
     p = os.fspath(path)
     if not isinstance(p, str):
         raise _wrong(name, path, "a path (str or os.PathLike of str)")
-    if "\0" in p:  # the engine's C strings would end there: another file
-        raise ValueError(f"{name} {p!r}: embedded null character")
     return p
 
 
