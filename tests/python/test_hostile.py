@@ -351,8 +351,11 @@ def test_ctrl_c_interrupts_a_projection_at_once(tmp_path):
     kind, completed, read = lines[0].split()
     assert (kind, completed) == ("KeyboardInterrupt", "False")
     # the signal came once a tenth was read; a projection that ran on to its
-    # end before answering would have read all of it
-    assert 0.1 <= float(read) < 0.5, r.stdout
+    # end before answering would have read all of it (1.0). How far past a
+    # tenth it got depends on when the watching thread was scheduled on a
+    # loaded machine (0.51 seen with other builds running), so the bound is
+    # the whole file less a margin for read-ahead, not a time
+    assert 0.1 <= float(read) < 0.9, r.stdout
     assert lines[1] == "(100, 100, 1)"
 
 
