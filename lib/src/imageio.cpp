@@ -6,6 +6,7 @@
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfRgbaFile.h>
 #include <OpenEXR/ImfTestFile.h>
+#include <OpenEXR/openexr.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <fcntl.h>
@@ -76,7 +77,164 @@ std::string failure(const std::string& why) {
   return why;
 }
 
+// OpenEXR's chunk kinds: bytes a chunk takes at the least beyond its data
+// (its offset-table entry and its header: y and size; tile x, y, levels and
+// size; deep: the sample-count table's sizes and the unpacked size), and
+// the part number of a multi-part file.
+std::uint64_t chunk_overhead(exr_storage_t storage, bool multipart) {
+  const std::uint64_t header = storage == EXR_STORAGE_SCANLINE        ? 8
+                               : storage == EXR_STORAGE_TILED         ? 20
+                               : storage == EXR_STORAGE_DEEP_SCANLINE ? 28
+                                                                      : 40;
+  return 8 + header + (multipart ? 4 : 0);
+}
+
+// The largest ratio of a chunk's decoded bytes to its stored bytes that an
+// OpenEXR compression reaches: deflate's limit (1032, for ZIP, ZIPS, PXR24)
+// times the 64 samples of a DCT block that DWA codes by one value; RLE (64),
+// PIZ (about 450: runs of 255 16-bit symbols in 9 bits) and B44 (11) stay
+// below.
+constexpr std::uint64_t kMaxCompression = 1032 * 64;
+
+struct ExrContext {
+  exr_context_t c = nullptr;
+  std::string why;  // the core's first message
+  ~ExrContext() {
+    if (c) exr_finish(&c);
+  }
+};
+
+void exr_message(exr_const_context_t c, exr_result_t, const char* msg) {
+  void* user = nullptr;
+  if (exr_get_user_data(c, &user) == EXR_ERR_SUCCESS && user) {
+    std::string& why = *static_cast<std::string*>(user);
+    if (why.empty() && msg) {
+      why = msg;  // names from the file's bytes: unprintable ones shown as '?'
+      for (char& ch : why)
+        if (static_cast<unsigned char>(ch) < 0x20 || static_cast<unsigned char>(ch) >= 0x7f) ch = '?';
+    }
+  }
+}
+
+// True when the file begins with OpenEXR's magic number.
+bool exr_magic(const std::string& path) {
+  unsigned char m[4] = {0, 0, 0, 0};
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  const bool ok = ::pread(fd, m, 4, 0) == 4;
+  ::close(fd);
+  return ok && m[0] == 0x76 && m[1] == 0x2f && m[2] == 0x31 && m[3] == 0x01;
+}
+
 }  // namespace
+
+// An OpenEXR file checked before any decoder allocates by its header, as
+// OpenEXR's exrcheck checks it, through OpenEXR's core (which parses the
+// header bounded by the file's size and allocates nothing by its claims):
+// every part's chunks must fit in the file's bytes; part 0 (what is read)
+// must not be deep, and each of its chunks of level 0 must be in the file
+// (no reconstruction of a damaged offset table), whole, and decode to no
+// more than any compression can make of its bytes. Returns whether the
+// channels are luminance-chroma (Y, RY, BY and optionally A, the chroma
+// subsampled), the files read through OpenEXR's RGBA interface.
+static bool check_exr(const std::string& path, std::uint64_t file_size) {
+  ExrContext ctx;
+  exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+  init.error_handler_fn = &exr_message;
+  init.user_data = &ctx.why;
+  init.flags |= EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
+  auto damaged = [&](const std::string& what) {
+    return InputError(path + ": damaged or truncated OpenEXR file: " + what);
+  };
+  auto truncated = [&](const std::string& what) {
+    return InputError(path + ": truncated file: " + what + " (the file has " + std::to_string(file_size) +
+                      " bytes)");
+  };
+  if (exr_start_read(&ctx.c, path.c_str(), &init) != EXR_ERR_SUCCESS) {
+    if (ctx.why.find("End of file") != std::string::npos) throw truncated("its OpenEXR header ends early");
+    throw damaged("its header does not parse (" + (ctx.why.empty() ? "OpenEXR" : ctx.why) + ")");
+  }
+  int parts = 0;
+  if (exr_get_count(ctx.c, &parts) != EXR_ERR_SUCCESS || parts < 1)
+    throw damaged("no part in its header");
+  std::uint64_t least = 0;  // bytes every part's chunks take at the least
+  for (int p = 0; p < parts; ++p) {
+    exr_storage_t storage;
+    int32_t chunks = 0;
+    if (exr_get_storage(ctx.c, p, &storage) != EXR_ERR_SUCCESS ||
+        exr_get_chunk_count(ctx.c, p, &chunks) != EXR_ERR_SUCCESS || chunks < 0)
+      throw damaged("part " + std::to_string(p) + " has no valid chunk count (" + ctx.why + ")");
+    least += std::uint64_t(chunks) * chunk_overhead(storage, parts > 1);
+    if (least > file_size) {
+      exr_attr_box2i_t dw{};
+      exr_get_data_window(ctx.c, p, &dw);
+      std::ostringstream m;
+      m << "part " << p << "'s header claims a data window of " << int64_t(dw.max.x) - dw.min.x + 1
+        << " x " << int64_t(dw.max.y) - dw.min.y + 1 << " pixels in " << chunks
+        << " chunks; with the parts before it that needs at least " << least << " bytes, the file has "
+        << file_size;
+      throw damaged(m.str());
+    }
+  }
+  exr_storage_t storage;
+  exr_get_storage(ctx.c, 0, &storage);
+  if (storage == EXR_STORAGE_DEEP_SCANLINE || storage == EXR_STORAGE_DEEP_TILED)
+    throw InputError(path + ": deep images are not supported");
+  // Part 0's chunks of level 0, each in the file and plausible.
+  // (each chunk's own message: the header's are not its)
+  auto check_chunk = [&](exr_result_t got, const exr_chunk_info_t& ci, const std::string& which) {
+    if (got != EXR_ERR_SUCCESS)
+      throw damaged(which + " is missing or damaged (" + (ctx.why.empty() ? "OpenEXR" : ctx.why) + ")");
+    if (ci.data_offset > file_size || ci.packed_size > file_size - ci.data_offset)
+      throw truncated(which + " runs past the end of the file");
+    if (ci.unpacked_size > (ci.packed_size + 1) * kMaxCompression) {
+      std::ostringstream m;
+      m << which << " claims " << ci.unpacked_size << " bytes of pixels from " << ci.packed_size
+        << " stored: beyond any OpenEXR compression";
+      throw damaged(m.str());
+    }
+  };
+  exr_attr_box2i_t dw{};
+  exr_get_data_window(ctx.c, 0, &dw);
+  exr_chunk_info_t ci;
+  if (storage == EXR_STORAGE_SCANLINE) {
+    int32_t lines = 1;
+    if (exr_get_scanlines_per_chunk(ctx.c, 0, &lines) != EXR_ERR_SUCCESS || lines < 1)
+      throw damaged("no valid rows per chunk");
+    for (int64_t y = dw.min.y; y <= dw.max.y; y += lines) {
+      std::memset(&ci, 0, sizeof ci);
+      ctx.why.clear();
+      check_chunk(exr_read_scanline_chunk_info(ctx.c, 0, int(y), &ci), ci,
+                  "the chunk of rows from " + std::to_string(y));
+    }
+  } else {
+    int32_t tw = 0, th = 0, lw = 0, lh = 0;
+    if (exr_get_tile_sizes(ctx.c, 0, 0, 0, &tw, &th) != EXR_ERR_SUCCESS ||
+        exr_get_level_sizes(ctx.c, 0, 0, 0, &lw, &lh) != EXR_ERR_SUCCESS || tw < 1 || th < 1)
+      throw damaged("no valid tile size");
+    const int64_t nx = (int64_t(lw) + tw - 1) / tw, ny = (int64_t(lh) + th - 1) / th;
+    for (int64_t ty = 0; ty < ny; ++ty)
+      for (int64_t tx = 0; tx < nx; ++tx) {
+        std::memset(&ci, 0, sizeof ci);
+        ctx.why.clear();
+        check_chunk(exr_read_tile_chunk_info(ctx.c, 0, int(tx), int(ty), 0, 0, &ci), ci,
+                    "tile " + std::to_string(tx) + ", " + std::to_string(ty));
+      }
+  }
+  const exr_attr_chlist_t* ch = nullptr;
+  if (parts != 1 || exr_get_channels(ctx.c, 0, &ch) != EXR_ERR_SUCCESS || !ch) return false;
+  bool y = false, ry = false, by = false;
+  for (int c = 0; c < ch->num_channels; ++c) {
+    const exr_attr_chlist_entry_t& e = ch->entries[c];
+    const std::string name(e.name.str, std::size_t(std::max(0, e.name.length)));
+    const bool sub = e.x_sampling == 2 && e.y_sampling == 2;
+    if (name == "Y") y = true;
+    else if (name == "RY" && sub) ry = true;
+    else if (name == "BY" && sub) by = true;
+    else if (name != "A") return false;
+  }
+  return y && ry && by;
+}
 
 ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path) {
   std::error_code ec;
@@ -90,14 +248,18 @@ ImageReader::ImageReader(const std::string& path) : impl_(new Impl), path_(path)
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
   ::close(fd);
-  if (fs::file_size(path, ec) == 0) throw InputError(path + ": empty file (0 bytes)");
-  // OpenImageIO first; a file it refuses may be a luminance-chroma OpenEXR
-  // (probed only then: a decoder made and freed before the reading raises
-  // glibc's dynamic mmap threshold, a higher peak).
+  const std::uint64_t size = fs::file_size(path, ec);
+  if (size == 0) throw InputError(path + ": empty file (0 bytes)");
+  // An OpenEXR file's header is checked against its size before any
+  // decoder allocates by it (check_exr).
+  const bool exr = exr_magic(path);
+  const bool yc = exr && check_exr(path, size);
+  // OpenImageIO first; a file it refuses may be a luminance-chroma OpenEXR,
+  // read through OpenEXR's RGBA interface.
   impl_->in = ImageInput::open(path);
   if (!impl_->in) {
     std::string why = OIIO::geterror();
-    if (!is_luminance_chroma(path)) {
+    if (!yc) {
       if (why.empty()) why = "not an image OpenImageIO can read";
       throw InputError(path + ": " + failure(why));
     }
@@ -138,16 +300,12 @@ bool ImageReader::luminance_chroma() const { return impl_->luminance_chroma; }
 
 bool ImageReader::is_luminance_chroma(const std::string& path) {
   try {
-    if (!Imf::isOpenExrFile(path.c_str())) return false;
-    Imf::InputFile probe(path.c_str(), 1);
-    const Imf::ChannelList& ch = probe.header().channels();
-    for (const char* name : {"RY", "BY"}) {
-      const Imf::Channel* c = ch.findChannel(name);
-      if (c && (c->xSampling != 1 || c->ySampling != 1)) return true;
-    }
-  } catch (const std::exception&) {
+    std::error_code ec;
+    const std::uint64_t size = fs::file_size(path, ec);
+    return !ec && exr_magic(path) && check_exr(path, size);
+  } catch (const InputError&) {
+    return false;
   }
-  return false;
 }
 
 void ImageReader::open_luminance_chroma() {
