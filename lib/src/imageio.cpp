@@ -200,8 +200,13 @@ static bool check_exr(const std::string& path, std::uint64_t file_size) {
   // Part 0's chunks of level 0, each in the file and plausible.
   // (each chunk's own message: the header's are not its)
   auto check_chunk = [&](exr_result_t got, const exr_chunk_info_t& ci, const std::string& which) {
-    if (got != EXR_ERR_SUCCESS)
+    if (got != EXR_ERR_SUCCESS) {
+      // the core names the file's size where a chunk's leader claims more
+      // bytes than are left: a cut file
+      if (ctx.why.find("file size") != std::string::npos)
+        throw truncated(which + " runs past the end of the file (" + ctx.why + ")");
       throw damaged(which + " is missing or damaged (" + (ctx.why.empty() ? "OpenEXR" : ctx.why) + ")");
+    }
     if (ci.data_offset > file_size || ci.packed_size > file_size - ci.data_offset)
       throw truncated(which + " runs past the end of the file");
     if (ci.unpacked_size > (ci.packed_size + 1) * kMaxCompression) {
