@@ -931,16 +931,24 @@ std::string counts(unsigned mask) {
     s += (i == 0 ? "" : i + 1 == c.size() ? " or " : ", ") + std::to_string(c[i]);
   return s;
 }
+
+// The limits of the writer OpenImageIO picks for a name (nullptr: none
+// known, or no writer, check_output's refusal: *writer false).
+const WriterLimits* writer_limits(const std::string& path, bool* writer = nullptr) {
+  auto out = ImageOutput::create(path);
+  if (writer) *writer = bool(out);
+  if (!out) return nullptr;
+  for (const WriterLimits& l : kWriters)
+    if (out->format_name() == std::string(l.format)) return &l;
+  return nullptr;
+}
 }  // namespace
 
 void check_output_image(const std::string& path, int channels, long width, long height,
                         bool half) {
   check_path(path, true);
-  auto out = ImageOutput::create(path);
-  if (!out) return;  // check_output's refusal
-  const std::string format = out->format_name();
-  for (const WriterLimits& l : kWriters) {
-    if (format != l.format) continue;
+  if (const WriterLimits* found = writer_limits(path)) {
+    const WriterLimits& l = *found;
     if (l.channels && (channels < 1 || channels > 31 || !(l.channels >> channels & 1)))
       throw OutputError(path + ": " + l.name + " output holds " + counts(l.channels) +
                         " channels, not " + std::to_string(channels));
@@ -957,11 +965,9 @@ void check_output_image(const std::string& path, int channels, long width, long 
 }
 
 bool holds_half(const std::string& path) {
-  auto out = ImageOutput::create(path);
-  if (!out) return false;
-  for (const WriterLimits& l : kWriters)
-    if (out->format_name() == std::string(l.format)) return l.half;
-  return true;
+  bool writer = false;
+  const WriterLimits* l = writer_limits(path, &writer);
+  return writer && (!l || l->half);
 }
 
 float srgb_to_linear(float v) {
