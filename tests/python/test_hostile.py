@@ -434,3 +434,20 @@ def test_the_handlers_are_put_back_after_a_write(tmp_path):
     r = run_python(code, tmp_path / "o.exr")
     assert r.returncode == 0, r.stderr
     assert r.stdout.split() == ["True", "True", "True", f"[{int(signal.SIGHUP)}]"]
+
+
+def test_resample_size_as_siproject_spells_it():
+    """resample() reads a size as project() and siproject's --size do,
+    against the coefficients' frame: a width alone keeps the aspect, 0 is
+    the other side's, a percentage scales the frame."""
+    k = siproject.coefficients(np.random.default_rng(3).random((40, 60, 3), dtype=np.float32),
+                               factor=2)
+    assert k.resample().shape == (20, 30, 3)
+    assert np.array_equal(k.resample("15"), k.resample((15, 10)))
+    assert np.array_equal(k.resample("0x10"), k.resample((15, 10)))
+    assert np.array_equal(k.resample("50%"), k.resample((15, 10)))
+    assert np.array_equal(k.resample(12), k.resample((12, 12)))
+    with pytest.raises(ValueError, match=r"^--size 'x7': expected WxH"):
+        k.resample("x7")
+    with pytest.raises(ValueError, match="more than"):
+        k.resample("3000000000x2")

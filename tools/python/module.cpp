@@ -274,7 +274,9 @@ PyCoefficients load_file(const std::string& path, bool zero_nonfinite, int threa
   });
 }
 
-py::array_t<float> resample_to(const PyCoefficients& c, long width, long height,
+// size: as siproject's --size spells it ("" : the frame's), resolved against
+// the frame as --size is against the input (960: the width, the aspect kept).
+py::array_t<float> resample_to(const PyCoefficients& c, const std::string& size,
                             const std::string& display, const std::string& clamp) {
   return translated(false, [&] {
     const Clamp cl = [&] {
@@ -290,9 +292,9 @@ py::array_t<float> resample_to(const PyCoefficients& c, long width, long height,
                               ? (c.k.min_error ? Display::antialiased_2x2() : Display::centred())
                               : Display::parse(display);
     const auto frame = visit_space(c.k, [&](auto space) { return space.frame(c.k); });
-    const long W = width > 0 ? width : frame.first, H = height > 0 ? height : frame.second;
-    if (W > kMaxOutputSide || H > kMaxOutputSide)
-      throw RequestError("--size: more than " + std::to_string(kMaxOutputSide) + " pixels per side");
+    Settings asked;
+    asked.size = size;
+    const auto [W, H] = output_size(asked, resolve(asked), frame.first, frame.second);
     FinalImage f;
     {
       py::gil_scoped_release free;

@@ -356,23 +356,14 @@ class Coefficients:
     def resample(self, size: Optional[Size] = None, display: Optional[str] = None,
                  clamp: str = "none", *,
                  output_shape: Optional[Tuple[int, int]] = None) -> np.ndarray:
-        """The final image at size ((width, height), or output_shape (rows,
-        cols); None: the frame's), sampled by display (None: 2x2 for
+        """The final image at size (N, (width, height), or a string as
+        siproject's --size spells it against the frame: "960", "0x540",
+        "50%"; or output_shape (rows, cols); None: the frame's), sampled by display (None: 2x2 for
         min-error, centred for conventional), as float32 (height, width,
         channels), or (height, width) for coefficients of an array of two
         dimensions."""
-        w = h = 0
-        if size is not None or output_shape is not None:
-            spelled = _size(size, output_shape)
-            try:
-                w, h = (int(v) for v in spelled.lower().split("x"))
-            except ValueError:
-                raise ValueError(f"--size '{spelled}': expected WxH with positive whole numbers, "
-                                 f"e.g. 1000x750") from None
-            if w < 1 or h < 1:
-                raise ValueError(f"--size '{spelled}': expected WxH with positive whole numbers, "
-                                 f"e.g. 1000x750")
-        image = self._k._resample(w, h, _text("display", display, optional=True) or "",
+        image = self._k._resample(_size(size, output_shape),
+                                  _text("display", display, optional=True) or "",
                                   _text("clamp", clamp))
         return image[:, :, 0] if self._grey else image
 
