@@ -974,7 +974,7 @@ constexpr WriterLimits kWriters[] = {
     {"jpeg", "JPEG", 0x0a, 65500, 1, kU8, kInt, kDesc, "jpeg:100"},
     {"bmp", "BMP", kGreyRgbRgba, 0, 1, kU8, kInt, kNone, ""},
     {"targa", "Targa", kOneToFour, 65535, 1, kU8, kInt, kNone, "none rle"},
-    {"pnm", "PNM", 0x0a, 0, 1, kU8 | kU16, kInt, kNone, ""},
+    {"pnm", "PNM", 0x0a, 0, 1, kU8, kInt, kNone, ""},  // 16-bit: 8-bit values widened
     {"gif", "GIF", kRgbRgba, 65535, 1, kU8, kInt, kNone, ""},
     {"webp", "WebP", kRgbRgba, 16383, 1, kU8, kInt, kNone, "webp:100 lossless"},
     {"hdr", "Radiance HDR", 0x08, 0, 1, kFloat, kFlt, kNone, ""},
