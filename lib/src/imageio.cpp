@@ -1283,13 +1283,12 @@ StagedFile stage(const std::string& path, const ImageSpec& spec, TypeDesc data_t
     std::vector<float> all(std::size_t(spec.width) * spec.height * back->spec().nchannels);
     readable = back->read_image(0, 0, 0, back->spec().nchannels, TypeDesc::FLOAT, all.data());
   }
-  // The compression asked, where the file says which it has (OpenEXR, TIFF;
-  // deflate reads back as zip).
+  // The compression asked, where the file says which it has (OpenEXR, TIFF).
   std::string wrote;
   if (readable && !compression.empty() &&
       (back->format_name() == std::string("openexr") || back->format_name() == std::string("tiff"))) {
     wrote = back->spec().get_string_attribute("compression");
-    if (OIIO::Strutil::iequals(wrote, compression == "deflate" ? "zip" : compression)) wrote.clear();
+    if (OIIO::Strutil::iequals(wrote, compression)) wrote.clear();
   }
   std::string back_why = back ? back->geterror() : OIIO::geterror();
   if (back) back->close();
@@ -1350,7 +1349,8 @@ StagedFile stage_image(const std::string& path, const Image& image,
     if (c.quality) spec.attribute("CompressionQuality", c.quality);
   }
   if (stored == TypeDesc::HALF) {  // converted here: OpenImageIO's conversion is serial and slower
-    if (lower_extension(path) == ".tif" || lower_extension(path) == ".tiff")
+    const WriterLimits* l = writer_limits(path);
+    if (l && l->format == std::string("tiff"))
       spec.attribute("tiff:half", 1);  // else OpenImageIO's TIFF writer stores float
     Buffer<std::uint16_t> half(image.data.size());  // unset: every value converted
     float_to_half(image.data.data(), half.data(), half.size());
