@@ -197,8 +197,9 @@ int run(const Options& o) {
     if (set.integer_bits > bits)
       std::fprintf(stderr,
                    "siproject: warning: the input's %d-bit samples are written %d-bit: %s's format "
-                   "holds no more (-d float or a 16-bit format, .png or .tif, keeps them)\n",
-                   set.integer_bits, bits, o.output.c_str());
+                   "holds no more (%s keeps them)\n",
+                   set.integer_bits, bits, o.output.c_str(),
+                   set.integer_bits > 16 ? "-d float with .tif or .exr" : ".png, .tif or -d float");
   }
   const std::vector<std::string> names = set.channel_names;
   const std::string input_label = set.label;
@@ -570,7 +571,7 @@ int main(int argc, char** argv) try {
   app.add_option("--coeffs", o.coeffs, "also write the coefficients as a float EXR with their metadata");
   app.add_option("-d,--data-format", o.data_format,
                  "sample type of the output: uint8 or uint16 (sRGB-encoded, clamped to [0, 1]; "
-                 "PNG, TIFF, PNM, SGI, DPX, IFF, RLA hold uint16), half or float (linear: EXR, "
+                 "PNG, TIFF, SGI, DPX, IFF, RLA hold uint16), half or float (linear: EXR, "
                  "TIFF; float also DPX, RLA) [default: the input's, as oiiotool does: EXR half "
                  "when the input stores half (float where the output passes half's largest "
                  "value 65504; -d half clamps there instead), else float; integer formats 16-bit "
