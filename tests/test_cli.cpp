@@ -681,6 +681,14 @@ TEST_F(Cli, CompressionAsAskedOrRefused) {
   ASSERT_EQ(run(path("big.exr") + " -o " + path("q95.jpg") + " --factor 2 -q --quality 95").status, 0);
   ASSERT_EQ(run(path("big.exr") + " -o " + path("c50.jpg") + " --factor 2 -q --compression jpeg:50").status, 0);
   EXPECT_LT(fs::file_size(path("q50.jpg")), fs::file_size(path("q95.jpg")));
+  // --quality alone reaches WebP's and HEIF's writers too (HEIF's only
+  // through its name heic, which siproject gives it)
+  for (const char* ext : {"webp", "heic"}) {
+    const std::string lo = path(std::string("q30.") + ext), hi = path(std::string("q90.") + ext);
+    ASSERT_EQ(run(path("big.exr") + " -o " + lo + " --factor 2 -q --quality 30").status, 0) << lo;
+    ASSERT_EQ(run(path("big.exr") + " -o " + hi + " --factor 2 -q --quality 90").status, 0) << hi;
+    EXPECT_LT(fs::file_size(lo), fs::file_size(hi)) << ext;
+  }
   EXPECT_EQ(read_back(path("q50.jpg")).uint16s, read_back(path("c50.jpg")).uint16s);
   // refused at once (exit 2, no file): names a writer would not take or
   // would replace, qualities outside a name's range, types a format does not hold
