@@ -98,6 +98,7 @@ def test_compression_as_asked(tmp_path):
     ("o.exr", dict(dtype="uint8"), r"^dtype='uint8': .*o\.exr: OpenEXR output holds half or float samples"),
     ("o.png", dict(dtype="int8"), r"^dtype='int8': expected \"uint8\", \"uint16\", \"half\" or \"float\"$"),
     ("o.png", dict(half=True, dtype="uint16"), r"^half=True and dtype='uint16': give one$"),
+    ("o.png", dict(half=True), r"^half=True: .*o\.png: PNG output holds uint8 or uint16 samples, not half$"),
     ("o.png", dict(compression="zip"), r"^compression='zip': .*o\.png: PNG output takes compression default"),
     ("o.exr", dict(compression="zip:50"), r"^compression='zip:50': .*OpenEXR compression zip takes a quality 1 to 9"),
     ("o.exr", dict(compression="lzw"), r"^compression='lzw': .*OpenEXR output takes compression zip"),

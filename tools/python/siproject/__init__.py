@@ -541,8 +541,14 @@ def write_image(path: Union[str, "os.PathLike[str]"], image: np.ndarray, *,
         raise _wrong("quality", quality, "a whole number 1 to 100 (int) or None")
     if quality is not None and not 1 <= quality <= 100:
         raise ValueError(f"quality={quality!r}: expected 1 to 100")
-    clamped = _core._write_image(_path("path", path), _samples(image), list(channel_names),
-                                 _whole("alpha", alpha), kind, compression or "", int(quality or 0))
+    try:
+        clamped = _core._write_image(_path("path", path), _samples(image), list(channel_names),
+                                     _whole("alpha", alpha), kind, compression or "",
+                                     int(quality or 0))
+    except ValueError as e:  # half=True asked for the type: named as the caller spelt it
+        if dtype is None and str(e).startswith("dtype='half': "):
+            raise ValueError("half=True: " + str(e)[len("dtype='half': "):]) from None
+        raise
     if clamped:
         _warnings.warn(f"write_image(): half=True: {clamped} samples beyond +-65504 clamped there",
                        RuntimeWarning, stacklevel=2)
