@@ -7,6 +7,8 @@
 #include <OpenImageIO/imageio.h>
 
 #include <cmath>
+#include <cstring>
+#include <map>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -438,4 +440,288 @@ TEST(Docs, EveryOptionOfSiprojectIsDocumented) {
     if (o == "--help") continue;
     EXPECT_TRUE(std::regex_search(md, std::regex("`" + o + "[` ,=]"))) << o << " is not in docs/siproject.md";
   }
+}
+
+// ---- output formats as oiiotool users expect ---------------------------------
+
+namespace {
+
+// The sRGB encoding (IEC 61966-2-1) in double, written here: the expected
+// integer samples are not computed by the encoder under test.
+double srgb_encode(double v) {
+  v = std::clamp(v, 0.0, 1.0);
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+}
+
+struct Read {
+  OIIO::ImageSpec spec;
+  std::string format;
+  std::vector<float> floats;           // every sample, as OpenImageIO converts it
+  std::vector<std::uint16_t> uint16s;  // the same, as uint16
+};
+
+Read read_back(const std::string& path) {
+  Read r;
+  auto in = OIIO::ImageInput::open(path);
+  EXPECT_TRUE(in) << path << ": " << OIIO::geterror();
+  if (!in) return r;
+  r.spec = in->spec();
+  r.format = in->format_name();
+  const std::size_t n = std::size_t(r.spec.width) * r.spec.height * r.spec.nchannels;
+  r.floats.resize(n);
+  r.uint16s.resize(n);
+  EXPECT_TRUE(in->read_image(0, 0, 0, r.spec.nchannels, OIIO::TypeDesc::FLOAT, r.floats.data()));
+  EXPECT_TRUE(in->read_image(0, 0, 0, r.spec.nchannels, OIIO::TypeDesc::UINT16, r.uint16s.data()));
+  return r;
+}
+
+// A smooth 3-channel float input whose output spans [0, 1] and beyond.
+void write_ramp(const std::string& path, long w, long h, int channels = 3) {
+  Image in(w, h, channels);
+  for (long y = 0; y < h; ++y)
+    for (long x = 0; x < w; ++x)
+      for (int c = 0; c < channels; ++c)
+        in.at(x, y, c) = float(1.1 * (x + 0.5) / w * (c + 1) / channels + 0.002 * y);
+  write_exr(path, in);
+}
+
+const char* const kTypes[] = {"uint8", "uint16", "half", "float"};
+const OIIO::TypeDesc kOiioTypes[] = {OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT16,
+                                     OIIO::TypeDesc::HALF, OIIO::TypeDesc::FLOAT};
+
+}  // namespace
+
+TEST_F(Cli, WriterTableIsWhatOpenImageIOsWritersDo) {
+  // Each format written by OpenImageIO itself (not our writer) with each
+  // sample type, a namespaced key and a long multi-line description, read
+  // back: the types it holds and how it carries metadata are the table's.
+  std::string description;
+  for (int k = 0; k < 16; ++k) description += "sis:key" + std::to_string(k) + "=" + std::string(30, 'v') + "\n";
+  const std::pair<const char*, int> formats[] = {
+      {"exr", 3}, {"tif", 3}, {"png", 3}, {"jpg", 3}, {"tga", 3}, {"dpx", 3}, {"sgi", 3},
+      {"fits", 3}, {"bmp", 3}, {"ppm", 3}, {"hdr", 3}, {"webp", 3}, {"iff", 3}, {"gif", 3},
+      {"rla", 3}, {"heic", 3}, {"zfile", 1}};
+  for (const auto& [ext, channels] : formats) {
+    const std::string name = path(std::string("probe.") + ext);
+    std::string held;
+    for (int t = 0; t < 4; ++t) {
+      OIIO::ImageSpec spec(8, 8, channels, kOiioTypes[t]);
+      if (t == 2 && std::string(ext) == "tif") spec.attribute("tiff:half", 1);  // as stage_image asks
+      // 16-bit values no multiple of 257, read back exactly: 8-bit values
+      // widened (PNM) do not pass
+      std::vector<std::uint16_t> want(8 * 8 * channels);
+      std::vector<float> px(want.size(), 0.5f);
+      for (std::size_t q = 0; q < px.size() && t == 1; ++q)
+        px[q] = float(want[q] = std::uint16_t((1 + 997 * q) % 65536)) / 65535;
+      auto out = OIIO::ImageOutput::create(name);
+      ASSERT_TRUE(out) << name;
+      const bool wrote = out->open(name, spec) && out->write_image(OIIO::TypeDesc::FLOAT, px.data()) && out->close();
+      out.reset();
+      auto in = wrote ? OIIO::ImageInput::open(name) : nullptr;
+      bool holds = in && in->spec().format == kOiioTypes[t];
+      if (holds && t == 1) {
+        std::vector<std::uint16_t> back(px.size());
+        holds = in->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT16, back.data()) && back == want;
+      }
+      in.reset();
+      EXPECT_EQ(holds_format(name, SampleFormat(t)), holds) << name << " " << kTypes[t];
+      fs::remove(name);
+    }
+    OIIO::ImageSpec spec(8, 8, channels, std::string(ext) == "hdr" || std::string(ext) == "zfile"
+                                             ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+    spec.attribute("sis:probe", "kept");
+    spec.attribute("ImageDescription", description);
+    std::vector<float> px(8 * 8 * channels, 0.5f);
+    auto out = OIIO::ImageOutput::create(name);
+    ASSERT_TRUE(out->open(name, spec) && out->write_image(OIIO::TypeDesc::FLOAT, px.data()) && out->close()) << name;
+    out.reset();
+    auto in = OIIO::ImageInput::open(name);
+    ASSERT_TRUE(in) << name;
+    const MetadataCarrier measured =
+        in->spec().get_string_attribute("sis:probe") == "kept" ? MetadataCarrier::Named
+        : in->spec().get_string_attribute("ImageDescription") == description ? MetadataCarrier::Description
+                                                                             : MetadataCarrier::None;
+    EXPECT_EQ(int(metadata_carrier(name)), int(measured)) << name;
+  }
+}
+
+TEST_F(Cli, RangeReportIsInEveryFormatThatCarriesIt) {
+  write_ramp(path("in.exr"), 32, 24);
+  // the keys' values, from the EXR output (named string attributes)
+  ASSERT_EQ(run(path("in.exr") + " -o " + path("o.exr") + " --factor 2 -q").status, 0);
+  auto exr = OIIO::ImageInput::open(path("o.exr"));
+  ASSERT_TRUE(exr);
+  std::map<std::string, std::string> expected;
+  for (const auto& p : exr->spec().extra_attribs)
+    if (p.name().string().rfind("sis:", 0) == 0) expected[p.name().string()] = p.get_string();
+  exr.reset();
+  ASSERT_GE(expected.size(), 14u);
+  EXPECT_EQ(expected["sis:method"], "min-error");
+  EXPECT_EQ(expected["sis:generator"], "cubic");
+  EXPECT_EQ(expected["sis:input"], "in.exr");
+  EXPECT_EQ(expected["sis:highlight_compress"], "0");
+  EXPECT_EQ(expected["sis:lattice"], "cartesian");
+  EXPECT_EQ(expected["sis:half_clamped"], "0");
+  // PNG by name; TIFF, JPEG and HEIF as key=value lines of the description,
+  // read by OpenImageIO and parsed here, and through ImageReader::attribute
+  for (const char* ext : {"png", "tif", "jpg", "heic"}) {
+    const std::string out = path(std::string("o.") + ext);
+    ASSERT_EQ(run(path("in.exr") + " -o " + out + " --factor 2 -q").status, 0) << out;
+    auto in = OIIO::ImageInput::open(out);
+    ASSERT_TRUE(in) << out;
+    std::map<std::string, std::string> got;
+    for (const auto& p : in->spec().extra_attribs)
+      if (p.name().string().rfind("sis:", 0) == 0) got[p.name().string()] = p.get_string();
+    std::istringstream lines(in->spec().get_string_attribute("ImageDescription"));
+    for (std::string l; std::getline(lines, l);)
+      if (l.rfind("sis:", 0) == 0 && l.find('=') != std::string::npos)
+        got[l.substr(0, l.find('='))] = l.substr(l.find('=') + 1);
+    EXPECT_EQ(got, expected) << out;
+    const ImageReader reader(out);
+    for (const auto& [k, v] : expected) EXPECT_EQ(reader.attribute(k), v) << out << " " << k;
+  }
+  // oiiotool shows them as the user sees them
+  const Result info = run_tool("oiiotool", "--info -v " + path("o.tif"));
+  EXPECT_TRUE(contains(info.output, "sis:highlight_compress=0")) << info.output;
+  // a name holding a newline and a backslash comes back as it was
+  const std::string odd = path("in\\ \n.exr");
+  fs::copy_file(path("in.exr"), odd);
+  ASSERT_EQ(run("'" + odd + "' -o " + path("odd.tif") + " --factor 2 -q").status, 0);
+  EXPECT_EQ(ImageReader(path("odd.tif")).attribute("sis:input"), "in\\ \n.exr");
+}
+
+TEST_F(Cli, SixteenBitAndFloatOutputsAsAsked) {
+  write_ramp(path("in.exr"), 40, 30);
+  ASSERT_EQ(run(path("in.exr") + " -o " + path("f.exr") + " --factor 2 -q -d float").status, 0);
+  const Read linear = read_back(path("f.exr"));
+  ASSERT_EQ(linear.spec.format, OIIO::TypeDesc::FLOAT);
+  for (const char* ext : {"png", "tif"}) {
+    const std::string out = path(std::string("o16.") + ext);
+    ASSERT_EQ(run(path("in.exr") + " -o " + out + " --factor 2 -q -d uint16").status, 0) << out;
+    const Read r = read_back(out);
+    EXPECT_EQ(r.spec.format, OIIO::TypeDesc::UINT16) << out;
+    EXPECT_EQ(r.spec.get_string_attribute("oiio:ColorSpace"), "sRGB") << out;
+    ASSERT_EQ(r.uint16s.size(), linear.floats.size());
+    // The encoder works in float: its encoded value is within a few float
+    // ulps (about 1e-7 relative, 0.01 of a 16-bit step) of the double
+    // encoding, so a sample whose exact value lies that close to a rounding
+    // midpoint may round the other way: at most one step, and rarely.
+    long exact = 0, clipped = 0;
+    for (std::size_t q = 0; q < r.uint16s.size(); ++q) {
+      const double want = std::round(65535.0 * srgb_encode(linear.floats[q]));
+      EXPECT_LE(std::abs(r.uint16s[q] - want), 1.0) << out << " sample " << q;
+      exact += r.uint16s[q] == want;
+      clipped += linear.floats[q] > 1;
+    }
+    EXPECT_GE(exact, long(0.97 * r.uint16s.size())) << out;
+    EXPECT_GT(clipped, 0) << "the ramp reaches past 1: clamping is tested";
+  }
+  // float and half TIFF: the EXR output's samples, bit for bit
+  for (const char* type : {"float", "half"}) {
+    const std::string tif = path(std::string(type) + ".tif"), exr = path(std::string(type) + ".exr");
+    ASSERT_EQ(run(path("in.exr") + " -o " + tif + " --factor 2 -q -d " + type).status, 0);
+    ASSERT_EQ(run(path("in.exr") + " -o " + exr + " --factor 2 -q -d " + type).status, 0);
+    const Read t = read_back(tif), e = read_back(exr);
+    EXPECT_EQ(t.spec.format, std::string(type) == "half" ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
+    EXPECT_EQ(t.spec.get_string_attribute("oiio:ColorSpace"), "") << "linear, not tagged sRGB";
+    ASSERT_EQ(t.floats.size(), e.floats.size());
+    EXPECT_EQ(std::memcmp(t.floats.data(), e.floats.data(), t.floats.size() * sizeof(float)), 0) << type;
+  }
+  // without -d a float input stays 8-bit in integer formats
+  ASSERT_EQ(run(path("in.exr") + " -o " + path("o8.tif") + " --factor 2 -q").status, 0);
+  EXPECT_EQ(read_back(path("o8.tif")).spec.format, OIIO::TypeDesc::UINT8);
+}
+
+TEST_F(Cli, SixteenBitInputsStaySixteenBit) {
+  for (const char* ext : {"tif", "png"}) {
+    const std::string in = path(std::string("in16.") + ext);
+    ASSERT_EQ(run_tool("oiiotool", "--pattern fill:left=0.1,0.2,0.3:right=0.9,0.8,0.7 64x48 3 -d uint16 -o " + in).status, 0);
+    for (const char* out_ext : {"tif", "png"}) {
+      const std::string out = path(std::string("o-") + ext + "." + out_ext);
+      const Result r = run(in + " -o " + out + " --factor 2");
+      ASSERT_EQ(r.status, 0) << r.output;
+      EXPECT_EQ(r.output, "") << "no bits lost, nothing to say";
+      EXPECT_EQ(read_back(out).spec.format, OIIO::TypeDesc::UINT16) << out;
+    }
+    // JPEG holds 8 bits: written 8-bit, and said
+    const Result r = run(in + " -o " + path("o.jpg") + " --factor 2");
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "warning: the input's 16-bit samples are written 8-bit")) << r.output;
+    EXPECT_EQ(read_back(path("o.jpg")).spec.format, OIIO::TypeDesc::UINT8);
+    // -d uint8 asks for 8 bits: no warning
+    const Result asked = run(in + " -o " + path("o8.png") + " --factor 2 -d uint8");
+    ASSERT_EQ(asked.status, 0) << asked.output;
+    EXPECT_EQ(asked.output, "");
+    EXPECT_EQ(read_back(path("o8.png")).spec.format, OIIO::TypeDesc::UINT8);
+  }
+}
+
+TEST_F(Cli, CompressionAsAskedOrRefused) {
+  write_ramp(path("in.exr"), 64, 64);
+  // lossless compressions: the name the file reports, the same pixels
+  const std::pair<const char*, const char*> lossless[] = {
+      {"exr", "zip"}, {"exr", "piz"}, {"exr", "zips:9"}, {"tif", "lzw"}, {"tif", "zip"}, {"tif", "none"}};
+  for (const auto& [ext, comp] : lossless) {
+    const std::string plain = path(std::string("plain.") + ext);
+    const std::string out = path(std::string(comp).substr(0, std::string(comp).find(':')) + "." + ext);
+    ASSERT_EQ(run(path("in.exr") + " -o " + plain + " --factor 2 -q -d float").status, 0);
+    const Result r = run(path("in.exr") + " -o " + out + " --factor 2 -q -d float --compression " + comp);
+    ASSERT_EQ(r.status, 0) << r.output;
+    const Read a = read_back(plain), b = read_back(out);
+    EXPECT_EQ(b.spec.get_string_attribute("compression"), std::string(comp).substr(0, std::string(comp).find(':')))
+        << out;
+    EXPECT_EQ(a.floats, b.floats) << out;
+  }
+  // a lossy one as asked: dwaa:45 in EXR
+  ASSERT_EQ(run(path("in.exr") + " -o " + path("dwa.exr") + " --factor 2 -q --compression dwaa:45").status, 0);
+  EXPECT_EQ(read_back(path("dwa.exr")).spec.get_string_attribute("compression"), "dwaa");
+  // JPEG quality: 50 makes a smaller file than 95; --quality and jpeg:Q agree
+  write_ramp(path("big.exr"), 256, 256);
+  ASSERT_EQ(run(path("big.exr") + " -o " + path("q50.jpg") + " --factor 2 -q --quality 50").status, 0);
+  ASSERT_EQ(run(path("big.exr") + " -o " + path("q95.jpg") + " --factor 2 -q --quality 95").status, 0);
+  ASSERT_EQ(run(path("big.exr") + " -o " + path("c50.jpg") + " --factor 2 -q --compression jpeg:50").status, 0);
+  EXPECT_LT(fs::file_size(path("q50.jpg")), fs::file_size(path("q95.jpg")));
+  // --quality alone reaches WebP's and HEIF's writers too (HEIF's only
+  // through its name heic, which siproject gives it)
+  for (const char* ext : {"webp", "heic"}) {
+    const std::string lo = path(std::string("q30.") + ext), hi = path(std::string("q90.") + ext);
+    ASSERT_EQ(run(path("big.exr") + " -o " + lo + " --factor 2 -q --quality 30").status, 0) << lo;
+    ASSERT_EQ(run(path("big.exr") + " -o " + hi + " --factor 2 -q --quality 90").status, 0) << hi;
+    EXPECT_LT(fs::file_size(lo), fs::file_size(hi)) << ext;
+  }
+  EXPECT_EQ(read_back(path("q50.jpg")).uint16s, read_back(path("c50.jpg")).uint16s);
+  // refused at once (exit 2, no file): names a writer would not take or
+  // would replace, qualities outside a name's range, types a format does not hold
+  const std::pair<std::string, std::string> refused[] = {
+      {"o.exr --compression foo", "--compression foo: " + path("o.exr") + ": OpenEXR output takes compression zip (zip:1 to zip:9), none, rle, zips (zips:1 to zips:9), piz, pxr24, b44, b44a, dwaa (dwaa:1 to dwaa:100) or dwab (dwab:1 to dwab:100), not 'foo'"},
+      {"o.exr --compression zip:50", "OpenEXR compression zip takes a quality 1 to 9, not 50"},
+      {"o.exr --compression piz:50", "OpenEXR compression piz takes no quality"},
+      {"o.exr --compression zip:0", "the quality after ':' is a whole number 1 to 100"},
+      {"o.tif --compression piz", "TIFF output takes compression zip (zip:1 to zip:9), none, lzw, packbits or jpeg (jpeg:1 to jpeg:100), not 'piz'"},
+      {"o.tif --compression jpeg -d uint16", "TIFF compression jpeg holds 3-channel uint8 images only"},
+      {"o.tif --quality 50", "TIFF compression zip takes a quality 1 to 9, not 50"},
+      {"o.png --compression zip", "PNG output takes compression default, filtered, huffman, rle or fixed, not 'zip'"},
+      {"o.png --quality 90", "PNG output takes no quality"},
+      {"o.bmp --compression rle", "BMP output takes no compression or quality"},
+      {"o.jpg --compression jpeg:90 --quality 80", "give the quality once"},
+      {"o.jpg --quality 0", "--quality"},
+      {"o.jpg --quality 101", "--quality"},
+      {"o.jpg -d uint16", "-d/--data-format uint16: " + path("o.jpg") + "'s format holds uint8 samples, not uint16"},
+      {"o.exr -d uint8", "-d/--data-format uint8: " + path("o.exr") + "'s format holds half or float samples, not uint8"},
+      {"o.png -d float", "holds uint8 or uint16 samples, not float"},
+      {"o.tif -d int8", "-d/--data-format: sample format 'int8': expected uint8, uint16, half or float"},
+  };
+  for (const auto& [args, message] : refused) {
+    const Result r = run(path("in.exr") + " -o " + path(args) + " --factor 2");
+    EXPECT_EQ(r.status, 2) << args << ": " << r.output;
+    EXPECT_TRUE(contains(r.output, message)) << args << ": " << r.output;
+  }
+  // one-channel EXR: the writer would use zip for DWA
+  Image grey(16, 16, 1);
+  write_exr(path("grey.exr"), grey);
+  const Result r = run(path("grey.exr") + " -o " + path("g.exr") + " --factor 2 --compression dwaa");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_TRUE(contains(r.output, "needs 2 or more channels")) << r.output;
+  for (const char* name : {"o.exr", "o.tif", "o.png", "o.bmp", "o.jpg", "g.exr"})
+    EXPECT_FALSE(fs::exists(path(name))) << name;
 }

@@ -352,7 +352,7 @@ TEST_F(Siproject, BadInputGetsAClearErrorAndLosesNothing) {
       {in + out + " --factor 2 --boundary clamp", 2, "unknown boundary rule 'clamp'"},
       {in + out + " --factor -2", 2, "--factor"},
       {in + out + " --factor 2 -d double", 2, "-d/--data-format: sample format 'double'"},
-      {in + " -o " + path("out.png") + " --factor 2 -d half", 2, "is an 8-bit format"},
+      {in + " -o " + path("out.png") + " --factor 2 -d half", 2, "out.png's format holds uint8 or uint16 samples, not half"},
   };
   for (const Case& c : cases) {
     const Result r = run(c.args);

@@ -48,6 +48,8 @@ struct Options {
   std::vector<std::string> inputs;
   std::string output, coeffs;
   std::string data_format;  // "": the input's
+  std::string compression;  // "": the writer's default
+  int quality = 0;          // 0: none given
   bool verbose = false, quiet = false;
   // A batch: the inputs' frame range (--frames), the digits of '#' and '@'
   // (--framepadding, 0: theirs), and whether several inputs are row bands
@@ -123,12 +125,28 @@ int run(const Options& o) {
     } catch (const std::invalid_argument& e) {
       throw UsageError(std::string("-d/--data-format: ") + e.what());
     }
-    if (is_8bit_format(o.output))
-      throw UsageError("-d/--data-format " + o.data_format + ": " + o.output +
-                       " is an 8-bit format; the sample format applies to EXR and other float outputs");
-    if (*data_format == SampleFormat::Half && !holds_half(o.output))
-      throw UsageError("-d/--data-format half: " + o.output + "'s format holds float samples, not half");
+    std::string held;
+    if (!holds_format(o.output, *data_format, &held))
+      throw UsageError("-d/--data-format " + o.data_format + ": " + o.output + "'s format holds " +
+                       held + " samples, not " + o.data_format);
   }
+  Compression compression;
+  if (!o.compression.empty()) {
+    try {
+      compression = parse_compression(o.compression);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--compression ") + e.what());
+    }
+  }
+  if (o.quality) {
+    if (compression.quality && compression.quality != o.quality)
+      throw UsageError("--compression " + o.compression + " and --quality " +
+                       std::to_string(o.quality) + ": give the quality once");
+    compression.quality = o.quality;
+  }
+  // the option that asked for the compression, as messages name it
+  const std::string compression_option =
+      !o.compression.empty() ? "--compression " + o.compression : "--quality " + std::to_string(o.quality);
   if (!o.coeffs.empty() && same_file(o.output, o.coeffs))
     throw UsageError("--coeffs " + o.coeffs + " is the output file");
   for (const std::string& path : {o.output, o.coeffs}) {
@@ -161,6 +179,28 @@ int run(const Options& o) {
   } catch (const OutputError& e) {
     throw UsageError(std::string("-o ") + e.what());
   }
+  // Output samples as the input's (oiiotool's habit): in float formats half
+  // when every input stores half, else float; in integer formats 16-bit
+  // where the input's integer samples have 16 bits or more and the format
+  // holds them, else 8-bit. A coefficient file records its input's half.
+  SampleFormat out_format = data_format ? *data_format
+                                        : default_sample_format(o.output, set.half, set.integer_bits);
+  if (!compression.name.empty() || compression.quality) {
+    try {
+      check_write_options(o.output, C, out_format, compression);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(compression_option + ": " + o.output + ": " + e.what());
+    }
+  }
+  if (!data_format && is_integer(out_format) && set.integer_bits > 0 && !o.quiet) {
+    const int bits = out_format == SampleFormat::UInt16 ? 16 : 8;
+    if (set.integer_bits > bits)
+      std::fprintf(stderr,
+                   "siproject: warning: the input's %d-bit samples are written %d-bit: %s's format "
+                   "holds no more (%s keeps them)\n",
+                   set.integer_bits, bits, o.output.c_str(),
+                   set.integer_bits > 16 ? "-d float with .tif or .exr" : ".png, .tif or -d float");
+  }
   const std::vector<std::string> names = set.channel_names;
   const std::string input_label = set.label;
   const long win = set.width, hin = set.height;
@@ -178,11 +218,8 @@ int run(const Options& o) {
   const bool compressed = f.highlight_compressed;
   const bool input_half = f.input_half;
   const Clamp clamp = r.clamp;
-  // Output samples as the input's (oiiotool's habit): half when every input
-  // stores half, float otherwise; a coefficient file records its input's.
-  SampleFormat out_format =
-      input_half && holds_half(o.output) ? SampleFormat::Half : SampleFormat::Float;
-  if (data_format) out_format = *data_format;
+  if (f.from_coefficient_file && !data_format)
+    out_format = default_sample_format(o.output, input_half, 0);
   const Display& shown = f.display;
   Image& image = f.final.image;
   const bool own_range = f.final.own_range;
@@ -193,7 +230,7 @@ int run(const Options& o) {
   // -d half the samples are clamped there, and both are said.
   constexpr float kHalfMax = 65504.0f;
   long half_clamped = 0;
-  if (out_format == SampleFormat::Half && !is_8bit_format(o.output) &&
+  if (out_format == SampleFormat::Half &&
       (after.max > kHalfMax || after.min < -kHalfMax)) {
     if (!data_format) {
       out_format = SampleFormat::Float;
@@ -243,7 +280,9 @@ int run(const Options& o) {
                                             {"sis:input_transfer", f.input_transfer.name()},
                                             {"sis:highlight_compress", compressed ? "1" : "0"}}));
   Buffer<double>().swap(k.c.data);
-  StagedFile output_file = stage_image(o.output, image, names, md, f.inputs.alpha, out_format);
+  WriteOptions how(out_format);
+  how.compression = compression;
+  StagedFile output_file = stage_image(o.output, image, names, md, f.inputs.alpha, how);
   if (coeffs_file) coeffs_file->commit();
   output_file.commit();
   const double t_write = seconds_since(t);
@@ -466,8 +505,9 @@ int main(int argc, char** argv) try {
       "is (EXR alpha is premultiplied, so it is filtered with the colour); integer\n"
       "inputs tagged sRGB (PNG, JPEG...) are decoded to linear first. EXR output\n"
       "keeps the input's sample type (half or float; -d), with the method in its\n"
-      "metadata; every format but EXR, HDR, PFM and FITS is written 8-bit,\n"
-      "sRGB-encoded and clamped to [0, 1]. S < 1 upsamples (the input's cubic\n"
+      "metadata; every format but EXR, HDR, PFM, FITS and Zfile is written as integers\n"
+      "(8-bit, or 16-bit from 16-bit inputs where it holds them; -d), sRGB-encoded\n"
+      "and clamped to [0, 1]; -d half or float gives linear samples. S < 1 upsamples (the input's cubic\n"
       "interpolant is projected). If IN is a coefficient file (--coeffs), the stored\n"
       "approximation is evaluated instead: at its own size, --size or --factor, with\n"
       "any --display. Outputs replace a file only once written whole.\n"
@@ -480,7 +520,8 @@ int main(int argc, char** argv) try {
                  "--frames), are frames projected one after another; with --bands they are row "
                  "bands of one image")->required();
   app.add_option("-o,--output", o.output,
-                 "output image (.exr half or float, see -d; .png, .jpg, .tif... 8-bit sRGB); for "
+                 "output image (.exr half or float, see -d; .png, .jpg, .tif... 8- or 16-bit sRGB, "
+                 "or float with -d float); for "
                  "frames a folder (each keeps its input's file name) or a pattern (out.#.png)")
       ->required();
   app.add_option("--frames", o.frames,
@@ -529,9 +570,22 @@ int main(int argc, char** argv) try {
                            "mirror (half-sample symmetric) or periodic")->capture_default_str();
   app.add_option("--coeffs", o.coeffs, "also write the coefficients as a float EXR with their metadata");
   app.add_option("-d,--data-format", o.data_format,
-                 "sample type of an EXR (or other float) output: half or float [default: the "
-                 "input's, as oiiotool does: half when the input stores half, float where the "
-                 "output passes half's largest value 65504; -d half clamps there instead]");
+                 "sample type of the output: uint8 or uint16 (sRGB-encoded, clamped to [0, 1]; "
+                 "PNG, TIFF, SGI, DPX, IFF, RLA hold uint16), half or float (linear: EXR, "
+                 "TIFF; float also DPX, RLA) [default: the input's, as oiiotool does: EXR half "
+                 "when the input stores half (float where the output passes half's largest "
+                 "value 65504; -d half clamps there instead), else float; integer formats 16-bit "
+                 "for 16-bit integer inputs where the format holds it, else 8-bit]");
+  app.add_option("--compression", o.compression,
+                 "the writer's compression as oiiotool spells it, NAME or NAME:QUALITY: EXR zip "
+                 "(default), zips, piz, pxr24, rle, b44, b44a, dwaa, dwab, none (zip:1-9, "
+                 "dwaa:45); TIFF zip (default), lzw, packbits, jpeg, none; JPEG jpeg:Q; WebP "
+                 "webp:Q or lossless; HEIF heic:Q or none; PNG default, filtered, huffman, rle, "
+                 "fixed; Targa and IFF rle or none; names a writer would ignore are refused");
+  app.add_option("--quality", o.quality,
+                 "compression quality 1..100 (oiiotool's CompressionQuality): JPEG, WebP, HEIF, "
+                 "TIFF jpeg; the level 1..9 of EXR and TIFF zip")
+      ->check(CLI::Range(1, 100));
   app.add_option("--nonfinite", o.settings.nonfinite,
                  "NaN/Inf samples: error, or zero to replace them with 0")->capture_default_str();
   auto* transfer = app.add_option(

@@ -68,6 +68,36 @@ struct ImageReader::Impl {
 };
 
 namespace {
+// Text for one line of a description: backslashes, newlines and carriage
+// returns escaped (a file name may hold them).
+std::string escape_line(const std::string& v) {
+  std::string e;
+  for (char c : v) {
+    if (c == '\\') e += "\\\\";
+    else if (c == '\n') e += "\\n";
+    else if (c == '\r') e += "\\r";
+    else e += c;
+  }
+  return e;
+}
+std::string unescape_line(const std::string& e) {
+  std::string v;
+  for (std::size_t i = 0; i < e.size(); ++i) {
+    if (e[i] == '\\' && i + 1 < e.size()) {
+      const char n = e[++i];
+      v += n == 'n' ? '\n' : n == 'r' ? '\r' : n;
+    } else {
+      v += e[i];
+    }
+  }
+  return v;
+}
+// True for the writers whose formats carry metadata in their description
+// (kWriters).
+bool carries_in_description(const std::string& format);
+}  // namespace
+
+namespace {
 // A decoder's reason, named by its kind: a file that ends early says it is
 // truncated, whatever the library's wording.
 std::string failure(const std::string& why) {
@@ -492,7 +522,17 @@ Transfer default_transfer(bool integer_samples, const std::string& colorspace, d
 std::string ImageReader::format_name() const { return impl_->format; }
 std::vector<std::string> ImageReader::channel_names() const { return impl_->spec.channelnames; }
 std::string ImageReader::attribute(const std::string& name) const {
-  return impl_->spec.get_string_attribute(name);
+  const std::string named = impl_->spec.get_string_attribute(name);
+  if (!named.empty()) return named;
+  // formats that carry the keys as key=value lines of their description
+  // (TIFF, JPEG, HEIF: stage_image writes them there)
+  if (!carries_in_description(impl_->format)) return named;
+  std::istringstream lines(impl_->spec.get_string_attribute("ImageDescription"));
+  std::string line;
+  while (std::getline(lines, line))
+    if (line.size() > name.size() && line.compare(0, name.size(), name) == 0 && line[name.size()] == '=')
+      return unescape_line(line.substr(name.size() + 1));
+  return named;
 }
 
 long ImageReader::tile_height() const { return std::max(0, impl_->spec.tile_height); }
@@ -599,9 +639,9 @@ void ImageReader::read(long y0, long y1, SampleFormat format, void* rows) {
 }
 
 SampleFormat parse_sample_format(const std::string& spelling) {
-  if (spelling == "half") return SampleFormat::Half;
-  if (spelling == "float") return SampleFormat::Float;
-  throw std::invalid_argument("sample format '" + spelling + "': expected half or float");
+  for (SampleFormat f : {SampleFormat::UInt8, SampleFormat::UInt16, SampleFormat::Half, SampleFormat::Float})
+    if (spelling == sample_format_name(f)) return f;
+  throw std::invalid_argument("sample format '" + spelling + "': expected uint8, uint16, half or float");
 }
 
 long decode_strip_rows(const ImageReader& reader) {
@@ -769,7 +809,15 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
   return stop.load() == LONG_MAX ? -1 : stop.load();
 }
 
-std::string sample_format_name(SampleFormat f) { return f == SampleFormat::Half ? "half" : "float"; }
+std::string sample_format_name(SampleFormat f) {
+  switch (f) {
+    case SampleFormat::UInt8: return "uint8";
+    case SampleFormat::UInt16: return "uint16";
+    case SampleFormat::Half: return "half";
+    case SampleFormat::Float: break;
+  }
+  return "float";
+}
 
 namespace {
 // A half is infinite or NaN when its exponent bits are all ones.
@@ -846,14 +894,12 @@ std::string lower_extension(const std::string& path) {
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
-}  // namespace
 
-bool is_8bit_format(const std::string& path) {
+std::string out_format_name(const std::string& path) {
   const std::string ext = lower_extension(path);
-  for (const char* linear : {".exr", ".sxr", ".mxr", ".hdr", ".rgbe", ".pfm", ".fits", ".fit", ".fts"})
-    if (ext == linear) return false;
-  return true;
+  return ext.empty() ? std::string("format's") : ext.substr(1);
 }
+}  // namespace
 
 void check_output(const std::string& path) {
   check_path(path, true);
@@ -888,36 +934,56 @@ void check_output(const std::string& path) {
 
 namespace {
 // What OpenImageIO 2.4's writers hold, measured writer by writer (1 to 6
-// channels, sides up to 2^21, half and float samples, each read back).
-// Past these, some end the process (DPX asserts on 2 or 5+ channels),
+// channels, sides up to 2^21, each sample type written and read back, a
+// named key and a long multi-line ImageDescription written and read back)
+// and what their sources take as compression (src/*.imageio/*output.cpp).
+// Past the limits, some end the process (DPX asserts on 2 or 5+ channels),
 // hang (JPEG past 65500 pixels a side), write another image (JPEG: 2
-// channels as 3, 4+ as 3; GIF past 65535; FITS: 5+ channels, one row) or
-// fail once the work is done.
+// channels as 3, 4+ as 3; GIF past 65535; FITS: 5+ channels, one row;
+// types they do not hold as another: PNG float as uint8, TIFF half as
+// float) or fail once the work is done.
 struct WriterLimits {
   const char* format;  // OpenImageIO's name
   const char* name;    // as messages name it
   unsigned channels;   // bit c: c channels held (0: any count)
   long max_side;       // 0: none found
   long min_height;
-  bool half;           // half samples read back
+  unsigned types;      // bit SampleFormat: held (read back as written)
+  SampleFormat deflt;  // without -d (an integer type: uint16 for 16-bit inputs where held)
+  MetadataCarrier metadata;
+  // The compression names the writer takes ("" none), a name with ":N"
+  // takes a quality 1..N; the first name with a quality is the one that
+  // --quality alone means (the writer's default, or the only one).
+  const char* compressions;
 };
 constexpr unsigned kOneToFour = 0x1e, kGreyRgbRgba = 0x1a, kRgbRgba = 0x18;
+constexpr unsigned bit(SampleFormat f) { return 1u << unsigned(f); }
+constexpr unsigned kU8 = bit(SampleFormat::UInt8), kU16 = bit(SampleFormat::UInt16),
+                   kHalf = bit(SampleFormat::Half), kFloat = bit(SampleFormat::Float);
+constexpr SampleFormat kInt = SampleFormat::UInt8, kFlt = SampleFormat::Float;
+constexpr auto kNamed = MetadataCarrier::Named, kDesc = MetadataCarrier::Description,
+               kNone = MetadataCarrier::None;
 constexpr WriterLimits kWriters[] = {
-    {"dpx", "DPX", kGreyRgbRgba, 0, 1, true},
-    {"png", "PNG", kOneToFour, 1000000, 1, true},
-    {"jpeg", "JPEG", 0x0a, 65500, 1, true},
-    {"bmp", "BMP", kGreyRgbRgba, 0, 1, true},
-    {"targa", "Targa", kOneToFour, 65535, 1, true},
-    {"pnm", "PNM", 0x0a, 0, 1, true},
-    {"gif", "GIF", kRgbRgba, 65535, 1, true},
-    {"webp", "WebP", kRgbRgba, 16383, 1, true},
-    {"hdr", "Radiance HDR", 0x08, 0, 1, true},
-    {"fits", "FITS", kOneToFour, 999999, 2, false},
-    {"iff", "IFF", kRgbRgba, 8192, 1, true},
-    {"zfile", "Zfile", 0x02, 32767, 1, true},
-    {"sgi", "SGI", 0, 65534, 1, true},
-    {"rla", "RLA", 0, 32768, 1, true},
-    {"heif", "HEIF", kRgbRgba, 0, 1, true},
+    {"openexr", "OpenEXR", 0, 0, 1, kHalf | kFloat, kFlt, kNamed,
+     "zip:9 none rle zips:9 piz pxr24 b44 b44a dwaa:100 dwab:100"},
+    {"tiff", "TIFF", 0, 0, 1, kU8 | kU16 | kHalf | kFloat, kInt, kDesc,
+     "zip:9 none lzw packbits jpeg:100"},
+    {"dpx", "DPX", kGreyRgbRgba, 0, 1, kU8 | kU16 | kFloat, kInt, kNone, ""},
+    {"png", "PNG", kOneToFour, 1000000, 1, kU8 | kU16, kInt, kNamed,
+     "default filtered huffman rle fixed"},
+    {"jpeg", "JPEG", 0x0a, 65500, 1, kU8, kInt, kDesc, "jpeg:100"},
+    {"bmp", "BMP", kGreyRgbRgba, 0, 1, kU8, kInt, kNone, ""},
+    {"targa", "Targa", kOneToFour, 65535, 1, kU8, kInt, kNone, "none rle"},
+    {"pnm", "PNM", 0x0a, 0, 1, kU8, kInt, kNone, ""},  // 16-bit: 8-bit values widened
+    {"gif", "GIF", kRgbRgba, 65535, 1, kU8, kInt, kNone, ""},
+    {"webp", "WebP", kRgbRgba, 16383, 1, kU8, kInt, kNone, "webp:100 lossless"},
+    {"hdr", "Radiance HDR", 0x08, 0, 1, kFloat, kFlt, kNone, ""},
+    {"fits", "FITS", kOneToFour, 999999, 2, kU8 | kFloat, kFlt, kNone, ""},
+    {"iff", "IFF", kRgbRgba, 8192, 1, kU8 | kU16, kInt, kNone, "rle none"},
+    {"zfile", "Zfile", 0x02, 32767, 1, kFloat, kFlt, kNone, ""},
+    {"sgi", "SGI", 0, 65534, 1, kU8 | kU16, kInt, kNone, ""},
+    {"rla", "RLA", 0, 32768, 1, kU8 | kU16 | kFloat, kInt, kNone, ""},
+    {"heif", "HEIF", kRgbRgba, 0, 1, kU8, kInt, kDesc, "heic:100 none"},
 };
 
 std::string counts(unsigned mask) {
@@ -932,15 +998,53 @@ std::string counts(unsigned mask) {
   return s;
 }
 
+std::string either(const std::vector<std::string>& items) {
+  std::string s;
+  for (std::size_t i = 0; i < items.size(); ++i)
+    s += (i == 0 ? "" : i + 1 == items.size() ? " or " : ", ") + items[i];
+  return s;
+}
+
 // The limits of the writer OpenImageIO picks for a name (nullptr: none
 // known, or no writer, check_output's refusal: *writer false).
 const WriterLimits* writer_limits(const std::string& path, bool* writer = nullptr) {
+  if (writer) *writer = false;
+  if (path.find('\0') != std::string::npos) return nullptr;
   auto out = ImageOutput::create(path);
   if (writer) *writer = bool(out);
   if (!out) return nullptr;
   for (const WriterLimits& l : kWriters)
     if (out->format_name() == std::string(l.format)) return &l;
   return nullptr;
+}
+
+bool carries_in_description(const std::string& format) {
+  for (const WriterLimits& l : kWriters)
+    if (format == l.format) return l.metadata == MetadataCarrier::Description;
+  return false;
+}
+
+constexpr SampleFormat kAllFormats[] = {SampleFormat::UInt8, SampleFormat::UInt16,
+                                        SampleFormat::Half, SampleFormat::Float};
+
+// A writer's compression names: name and the largest quality it takes (0: none).
+std::vector<std::pair<std::string, int>> compressions_of(const WriterLimits& l) {
+  std::vector<std::pair<std::string, int>> names;
+  std::istringstream in(l.compressions);
+  std::string word;
+  while (in >> word) {
+    const std::size_t colon = word.find(':');
+    names.emplace_back(word.substr(0, colon),
+                       colon == std::string::npos ? 0 : std::stoi(word.substr(colon + 1)));
+  }
+  return names;
+}
+
+std::string describe_compressions(const WriterLimits& l) {
+  std::vector<std::string> items;
+  for (const auto& [name, q] : compressions_of(l))
+    items.push_back(q ? name + " (" + name + ":1 to " + name + ":" + std::to_string(q) + ")" : name);
+  return either(items);
 }
 }  // namespace
 
@@ -959,15 +1063,116 @@ void check_output_image(const std::string& path, int channels, long width, long 
     if (height > 0 && height < l.min_height)
       throw OutputError(path + ": " + l.name + " output needs at least " +
                         std::to_string(l.min_height) + " rows, not " + std::to_string(height));
-    if (half && !l.half)
+    if (half && !(l.types & kHalf))
       throw OutputError(path + ": " + l.name + " output holds float samples, not half");
   }
 }
 
-bool holds_half(const std::string& path) {
+bool holds_format(const std::string& path, SampleFormat f, std::string* held) {
   bool writer = false;
   const WriterLimits* l = writer_limits(path, &writer);
-  return writer && (!l || l->half);
+  const unsigned types = l ? l->types : writer ? ~0u : 0u;
+  if (held) {
+    std::vector<std::string> names;
+    for (SampleFormat t : kAllFormats)
+      if (types & bit(t)) names.push_back(sample_format_name(t));
+    *held = names.empty() ? std::string("nothing") : either(names);
+  }
+  return (types & bit(f)) != 0;
+}
+
+bool holds_half(const std::string& path) { return holds_format(path, SampleFormat::Half); }
+
+SampleFormat default_sample_format(const std::string& path, bool input_half, int integer_bits) {
+  bool writer = false;
+  const WriterLimits* l = writer_limits(path, &writer);
+  SampleFormat d = SampleFormat::UInt8;
+  if (l) {
+    d = l->deflt;
+  } else {
+    const std::string ext = lower_extension(path);
+    for (const char* linear : {".exr", ".sxr", ".mxr", ".hdr", ".rgbe", ".pfm", ".fits", ".fit", ".fts"})
+      if (ext == linear) d = SampleFormat::Float;
+  }
+  const unsigned types = l ? l->types : ~0u;
+  if (is_integer(d)) return integer_bits >= 16 && (types & kU16) ? SampleFormat::UInt16 : d;
+  return input_half && (types & kHalf) ? SampleFormat::Half : SampleFormat::Float;
+}
+
+bool is_8bit_format(const std::string& path) { return is_integer(default_sample_format(path)); }
+
+MetadataCarrier metadata_carrier(const std::string& path) {
+  const WriterLimits* l = writer_limits(path);
+  return l ? l->metadata : MetadataCarrier::Named;
+}
+
+Compression parse_compression(const std::string& spelling) {
+  Compression c;
+  const std::size_t colon = spelling.find(':');
+  c.name = spelling.substr(0, colon);
+  std::transform(c.name.begin(), c.name.end(), c.name.begin(),
+                 [](unsigned char ch) { return std::tolower(ch); });
+  if (c.name.empty() || c.name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789") != std::string::npos)
+    throw std::invalid_argument("'" + spelling + "': expected NAME or NAME:QUALITY (zip, piz, lzw, "
+                                "jpeg:90...)");
+  if (colon != std::string::npos) {
+    const std::string q = spelling.substr(colon + 1);
+    if (q.empty() || q.size() > 3 || q.find_first_not_of("0123456789") != std::string::npos ||
+        std::stoi(q) < 1 || std::stoi(q) > 100)
+      throw std::invalid_argument("'" + spelling + "': the quality after ':' is a whole number 1 to 100");
+    c.quality = std::stoi(q);
+  }
+  return c;
+}
+
+void check_write_options(const std::string& path, int channels, SampleFormat format,
+                         const Compression& compression) {
+  std::string held;
+  bool writer = false;
+  const WriterLimits* l = writer_limits(path, &writer);
+  const std::string fmt = l ? l->name : out_format_name(path);
+  if (writer && !holds_format(path, format, &held))
+    throw std::invalid_argument(fmt + " output holds " + held + " samples, not " +
+                                sample_format_name(format));
+  if (compression.quality && (compression.quality < 1 || compression.quality > 100))
+    throw std::invalid_argument("quality " + std::to_string(compression.quality) +
+                                ": expected 1 to 100");
+  if (compression.name.empty() && !compression.quality) return;
+  if (!l) throw std::invalid_argument(fmt + " output: no compression is known for its writer");
+  const auto names = compressions_of(*l);
+  if (names.empty()) throw std::invalid_argument(fmt + " output takes no compression or quality");
+  std::string name = compression.name;
+  int most = -1;  // the largest quality `name` takes
+  if (name.empty()) {
+    for (const auto& [n, q] : names)
+      if (q && most < 0) name = n, most = q;
+    if (most < 0)
+      throw std::invalid_argument(fmt + " output takes no quality (its compressions: " +
+                                  describe_compressions(*l) + ")");
+  } else {
+    for (const auto& [n, q] : names)
+      if (n == name) most = q;
+    if (most < 0)
+      throw std::invalid_argument(fmt + " output takes compression " + describe_compressions(*l) +
+                                  ", not '" + name + "'");
+  }
+  if (compression.quality && !most)
+    throw std::invalid_argument(fmt + " compression " + name + " takes no quality");
+  if (compression.quality > most)
+    throw std::invalid_argument(fmt + " compression " + name + " takes a quality 1 to " +
+                                std::to_string(most) + ", not " + std::to_string(compression.quality));
+  // Where the writer would use another compression than the one named.
+  const std::string f = l->format;
+  if (f == "tiff" && name == "jpeg" && (format != SampleFormat::UInt8 || channels != 3))
+    throw std::invalid_argument("TIFF compression jpeg holds 3-channel uint8 images only (the "
+                                "writer would use zip), not " + std::to_string(channels) +
+                                "-channel " + sample_format_name(format));
+  if (f == "openexr" && (name == "dwaa" || name == "dwab") && channels == 1)
+    throw std::invalid_argument("OpenEXR compression " + name + " needs 2 or more channels in a "
+                                "scanline file (the writer would use zip for one)");
+  if (f == "targa" && name == "rle" && channels < 3)
+    throw std::invalid_argument("Targa compression rle holds 3 or 4 channels only (the writer "
+                                "writes " + std::to_string(channels) + " uncompressed)");
 }
 
 float srgb_to_linear(float v) {
@@ -981,11 +1186,6 @@ float linear_to_srgb(float v) {
 }
 
 namespace {
-
-std::string out_format_name(const std::string& path) {
-  const std::string ext = lower_extension(path);
-  return ext.empty() ? std::string("format's") : ext.substr(1);
-}
 
 // Writes an OpenImageIO output through a staged file's descriptor. Every
 // write is checked (short writes retried, EINTR included) and the first
@@ -1041,7 +1241,7 @@ class CheckedFile : public OIIO::Filesystem::IOProxy {
 // Writes `spec` + pixels to a staged file beside `path` (committed by the
 // caller): never a partial file at `path`, and no temporary file left.
 StagedFile stage(const std::string& path, const ImageSpec& spec, TypeDesc data_type,
-                 const void* data) {
+                 const void* data, const std::string& compression = "") {
   check_output(path);
   check_output_image(path, spec.nchannels, spec.width, spec.height, spec.format == TypeDesc::HALF);
   auto out = ImageOutput::create(path);
@@ -1083,8 +1283,18 @@ StagedFile stage(const std::string& path, const ImageSpec& spec, TypeDesc data_t
     std::vector<float> all(std::size_t(spec.width) * spec.height * back->spec().nchannels);
     readable = back->read_image(0, 0, 0, back->spec().nchannels, TypeDesc::FLOAT, all.data());
   }
+  // The compression asked, where the file says which it has (OpenEXR, TIFF).
+  std::string wrote;
+  if (readable && !compression.empty() &&
+      (back->format_name() == std::string("openexr") || back->format_name() == std::string("tiff"))) {
+    wrote = back->spec().get_string_attribute("compression");
+    if (OIIO::Strutil::iequals(wrote, compression)) wrote.clear();
+  }
   std::string back_why = back ? back->geterror() : OIIO::geterror();
   if (back) back->close();
+  if (!wrote.empty())
+    throw OutputError(path + ": the " + out_format_name(path) + " writer used compression " + wrote +
+                      ", not " + compression + "; nothing written");
   if (!readable)
     throw OutputError(path + ": the " + out_format_name(path) + " writer made a file that does "
                       "not read back" + (back_why.empty() ? "" : " (" + back_why + ")") +
@@ -1096,31 +1306,60 @@ StagedFile stage(const std::string& path, const ImageSpec& spec, TypeDesc data_t
 
 void write_image(const std::string& path, const Image& image,
                  const std::vector<std::string>& channel_names, const Metadata& metadata,
-                 int alpha_channel, SampleFormat format) {
-  stage_image(path, image, channel_names, metadata, alpha_channel, format).commit();
+                 int alpha_channel, const WriteOptions& options) {
+  stage_image(path, image, channel_names, metadata, alpha_channel, options).commit();
 }
+
 
 StagedFile stage_image(const std::string& path, const Image& image,
                        const std::vector<std::string>& channel_names, const Metadata& metadata,
-                       int alpha_channel, SampleFormat format) {
+                       int alpha_channel, const WriteOptions& options) {
   if (image.width < 1 || image.height < 1 || image.channels < 1)
     throw OutputError(path + ": refusing to write an empty image");
-  const bool eight = is_8bit_format(path);
-  const TypeDesc stored = eight                          ? TypeDesc::UINT8
-                          : format == SampleFormat::Half ? TypeDesc::HALF
-                                                         : TypeDesc::FLOAT;
+  check_path(path, true);
+  const SampleFormat format = options.format ? *options.format : default_sample_format(path);
+  try {
+    check_write_options(path, image.channels, format, options.compression);
+  } catch (const std::invalid_argument& e) {
+    throw OutputError(path + ": " + e.what());
+  }
+  static const TypeDesc kStored[] = {TypeDesc::UINT8, TypeDesc::UINT16, TypeDesc::HALF, TypeDesc::FLOAT};
+  const TypeDesc stored = kStored[int(format)];
   ImageSpec spec(int(image.width), int(image.height), image.channels, stored);
   if (int(channel_names.size()) == image.channels) spec.channelnames = channel_names;
   if (alpha_channel >= 0 && alpha_channel < image.channels) spec.alpha_channel = alpha_channel;
   for (const auto& [k, v] : metadata) spec.attribute(k, v);
+  if (metadata_carrier(path) == MetadataCarrier::Description) {
+    // the namespaced keys the writer drops, as key=value lines
+    std::string text = spec.get_string_attribute("ImageDescription");
+    for (const auto& [k, v] : metadata)
+      if (k.find(':') != std::string::npos)
+        text += (text.empty() ? "" : "\n") + k + "=" + escape_line(v);
+    if (!text.empty()) spec.attribute("ImageDescription", text);
+  }
+  const Compression& c = options.compression;
+  std::string compression = c.name;
+  if (!c.name.empty() || c.quality) {
+    if (compression.empty()) {  // the writer's name that takes a quality (check_write_options)
+      const WriterLimits* l = writer_limits(path);
+      for (const auto& [n, q] : compressions_of(*l))
+        if (q && compression.empty()) compression = n;
+    }
+    spec.attribute("compression", compression);
+    if (c.quality) spec.attribute("CompressionQuality", c.quality);
+  }
   if (stored == TypeDesc::HALF) {  // converted here: OpenImageIO's conversion is serial and slower
+    const WriterLimits* l = writer_limits(path);
+    if (l && l->format == std::string("tiff"))
+      spec.attribute("tiff:half", 1);  // else OpenImageIO's TIFF writer stores float
     Buffer<std::uint16_t> half(image.data.size());  // unset: every value converted
     float_to_half(image.data.data(), half.data(), half.size());
-    return stage(path, spec, TypeDesc::HALF, half.data());
+    return stage(path, spec, TypeDesc::HALF, half.data(), compression);
   }
-  if (!eight) return stage(path, spec, TypeDesc::FLOAT, image.data.data());
-  // 8-bit: colour channels sRGB-encoded (after dividing out premultiplied
-  // alpha), alpha linear; everything clamped to [0, 1].
+  if (!is_integer(format)) return stage(path, spec, TypeDesc::FLOAT, image.data.data(), compression);
+  // Integer samples: colour channels sRGB-encoded (after dividing out
+  // premultiplied alpha), alpha linear; everything clamped to [0, 1];
+  // OpenImageIO rounds to the integer type.
   spec.attribute("oiio:ColorSpace", "sRGB");
   if (spec.alpha_channel >= 0) spec.attribute("oiio:UnassociatedAlpha", 1);
   const int C = image.channels, a = spec.alpha_channel;
@@ -1135,7 +1374,7 @@ StagedFile stage_image(const std::string& path, const Image& image,
         enc[p * C + c] = linear_to_srgb(a >= 0 ? (alpha > 0 ? in[c] / alpha : 0.0f) : in[c]);
     }
   }
-  return stage(path, spec, TypeDesc::FLOAT, enc.data());
+  return stage(path, spec, TypeDesc::FLOAT, enc.data(), compression);
 }
 
 void write_coefficients(const std::string& path, const Coefficients& k,

@@ -231,6 +231,10 @@ TYPE_MISTAKES = [
     ("write_image", dict(half="yes"), "half='yes': expected True or False, not str"),
     ("write_image", dict(alpha=1.5), "alpha=1.5: expected a whole number (int), not float"),
     ("write_image", dict(channel_names="RGB"), "channel_names='RGB': expected a sequence of strings"),
+    ("write_image", dict(dtype=3), 'dtype=3: expected "uint8", "uint16", "half", "float"'),
+    ("write_image", dict(compression=9), 'compression=9: expected a string ("zip", "piz"'),
+    ("write_image", dict(quality=50.0), "quality=50.0: expected a whole number 1 to 100 (int) or None, not float"),
+    ("write_image", dict(quality=True), "quality=True: expected a whole number 1 to 100 (int) or None, not bool"),
 ]
 
 

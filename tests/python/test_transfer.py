@@ -65,17 +65,25 @@ def greys(tmp_path_factory):
                                   "oiio8.jpg", "pil8.tif", "pil16.tif", "pil8.png", "pil8.jpg"])
 def test_flat_128_stays_128_through_siproject(greys, name):
     d, files = greys
-    path, _ = files[name]
+    path, bits = files[name]
     # the input holds 128 (JPEG's flat blocks included: a DC term only)
     np.testing.assert_allclose(siproject.read_image(path), 128 / 255, rtol=1e-7)
     out = d / (name + ".out.png")
-    run(path, "-o", out, "--factor", "2")
+    run(path, "-o", out, "--factor", "2", "-d", "uint8")
     got = np.asarray(Image.open(out))
     # Exact: the projection reproduces a constant to float rounding (1e-6
     # relative), far inside the half code step (0.5 / 255 in encoded units)
     # that would move the 8-bit value.
     assert got.shape[:2] == (H // 2, W // 2)
     assert np.all(got == 128), (name, np.unique(got))
+    if bits == 16:  # by default a 16-bit input gives a 16-bit output: 128 * 257
+        out16 = d / (name + ".out16.png")
+        run(path, "-o", out16, "--factor", "2")
+        info = subprocess.run(["oiiotool", "--info", out16], capture_output=True, text=True).stdout
+        assert "uint16 png" in info, info
+        with Image.open(out16) as im:
+            if im.mode.startswith("I"):  # Pillow reads 16-bit greyscale as it is
+                assert np.all(np.asarray(im) == GREY16), (name, np.unique(np.asarray(im)))
     # the linear result is the decoded grey
     exr = d / (name + ".out.exr")
     run(path, "-o", exr, "--factor", "2", "-d", "float")

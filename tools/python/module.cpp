@@ -498,24 +498,59 @@ PYBIND11_MODULE(_core, m) {
       return to_array(std::move(im));
     });
   });
-  // Returns the samples clamped to half's range.
+  // Returns the samples clamped to half's range. `dtype`, `compression`:
+  // "" for the format's default; `quality` 0 for none. A type or a
+  // compression the format does not take is a ValueError naming the keyword.
   m.def("_write_image", [](const std::string& path, FloatArray a,
-                           std::vector<std::string> channel_names, int alpha, bool half) {
+                           std::vector<std::string> channel_names, int alpha,
+                           const std::string& dtype, const std::string& compression, int quality) {
     Image im = image_of(a, "write_image()");
     return translated(true, [&] {
       check_output(path);
+      auto keyword = [](const std::string& name, const std::string& shown, const auto& check) {
+        try {
+          check();
+        } catch (const std::invalid_argument& e) {
+          throw std::invalid_argument(name + "=" + shown + ": " + e.what());
+        }
+      };
+      WriteOptions how;
+      if (!dtype.empty())
+        keyword("dtype", "'" + dtype + "'", [&] { how.format = parse_sample_format(dtype); });
+      if (!compression.empty())
+        keyword("compression", "'" + compression + "'", [&] { how.compression = parse_compression(compression); });
+      if (quality) {
+        keyword("quality", std::to_string(quality), [&] {
+          if (quality < 1 || quality > 100) throw std::invalid_argument("expected 1 to 100");
+          if (how.compression.quality && how.compression.quality != quality)
+            throw std::invalid_argument("compression='" + compression + "' gives another; give it once");
+          how.compression.quality = quality;
+        });
+      }
+      const SampleFormat format = how.format.value_or(default_sample_format(path));
+      auto check = [&](const Compression& c) {
+        try {
+          check_write_options(path, im.channels, format, c);
+        } catch (const std::invalid_argument& e) {
+          throw std::invalid_argument(path + ": " + e.what());
+        }
+      };
+      if (how.format) keyword("dtype", "'" + dtype + "'", [&] { check({}); });
+      if (!compression.empty())
+        keyword("compression", "'" + compression + "'", [&] { check(how.compression); });
+      else if (quality)
+        keyword("quality", std::to_string(quality), [&] { check(how.compression); });
       py::gil_scoped_release free;
       // As siproject -d half: magnitudes past half's largest value clamped
       // there (a half file would hold infinities), and counted.
       long clamped = 0;
-      if (half && !is_8bit_format(path)) {
+      if (format == SampleFormat::Half) {
         constexpr float kHalfMax = 65504.0f;
         for (float& v : im.data)
           if (std::abs(v) > kHalfMax) v = std::copysign(kHalfMax, v), ++clamped;
       }
       StagedFileSignals cleanup;  // SIGTERM, SIGHUP... remove the staged file
-      write_image(path, im, channel_names, {{"Software", "siproject (Python)"}}, alpha,
-                  half ? SampleFormat::Half : SampleFormat::Float);
+      write_image(path, im, channel_names, {{"Software", "siproject (Python)"}}, alpha, how);
       return clamped;
     });
   });

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -28,10 +29,12 @@ struct OutputError : std::runtime_error {
 
 using Metadata = std::vector<std::pair<std::string, std::string>>;
 
-// Sample types of float image files (EXR, float TIFF...).
-enum class SampleFormat { Half, Float };
-SampleFormat parse_sample_format(const std::string& spelling);  // half | float
+// Sample types of image files: integers (written sRGB-encoded, clamped to
+// [0, 1]) and floats (linear), as oiiotool's -d spells them.
+enum class SampleFormat { UInt8, UInt16, Half, Float };
+SampleFormat parse_sample_format(const std::string& spelling);  // uint8 | uint16 | half | float
 std::string sample_format_name(SampleFormat f);
+inline bool is_integer(SampleFormat f) { return f == SampleFormat::UInt8 || f == SampleFormat::UInt16; }
 
 // How stored samples encode linear light: linear, the sRGB curve
 // (IEC 61966-2-1) or a pure power (linear = stored ^ gamma). What the
@@ -130,7 +133,9 @@ class ImageReader {
   // channel is float or half.
   int integer_bits() const;
   std::string format_name() const;
-  // A string attribute of the file's metadata ("" when absent).
+  // A string attribute of the file's metadata ("" when absent); in the
+  // formats whose writers keep no named keys (MetadataCarrier::Description:
+  // TIFF, JPEG, HEIF) also a key=value line of the ImageDescription.
   std::string attribute(const std::string& name) const;
   // Rows aligned to the file's storage (tile height or 64 scanlines).
   long preferred_strip() const;
@@ -221,26 +226,78 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
 // Reads a whole image as float.
 Image read_image(const std::string& path);
 
-// Writes an image. EXR (and other float formats) as float, or half when
-// `format` says so, with the metadata as string attributes; 8-bit formats (PNG, JPEG, 8-bit TIFF...) sRGB-encoded
-// and clamped to [0, 1], alpha (premultiplied) divided out first.
+// A writer's compression as oiiotool's --compression spells it: a name and
+// a quality (0: none given), "zip", "dwaa:45", "jpeg:90".
+struct Compression {
+  std::string name;  // "": the writer's default
+  int quality = 0;   // 1..100; 0: the writer's default
+};
+// NAME or NAME:Q (Q a whole number 1..100); else std::invalid_argument.
+Compression parse_compression(const std::string& spelling);
+
+// How an output is written: its sample type (none: the format's default,
+// default_sample_format(path)) and compression.
+struct WriteOptions {
+  std::optional<SampleFormat> format;
+  Compression compression;
+  WriteOptions() = default;
+  WriteOptions(SampleFormat f) : format(f) {}  // NOLINT: a type alone says how
+};
+
+// Writes an image: integer samples (uint8, uint16) sRGB-encoded and clamped
+// to [0, 1], alpha (premultiplied) divided out first and kept linear, the
+// file tagged oiio:ColorSpace sRGB; float and half samples linear, as they
+// are. The metadata as the format carries it (metadata_carrier): string
+// attributes, or key=value lines of its ImageDescription, or not at all.
 // Written to a staged file beside `path` (staged_file.h), then renamed:
 // never a partial file, and any failed write (a full disk, the last block
-// and the close included) is an error. Throws OutputError naming the file.
+// and the close included) is an error; a type the format does not hold, or
+// a compression its writer does not take, is refused first
+// (check_write_options). Throws OutputError naming the file.
 void write_image(const std::string& path, const Image& image,
                  const std::vector<std::string>& channel_names = {},
                  const Metadata& metadata = {}, int alpha_channel = -1,
-                 SampleFormat format = SampleFormat::Float);
+                 const WriteOptions& options = {});
 // As write_image, short of the rename: the caller commits, so that several
 // outputs are all written before any of them replaces a file.
 StagedFile stage_image(const std::string& path, const Image& image,
                        const std::vector<std::string>& channel_names = {},
                        const Metadata& metadata = {}, int alpha_channel = -1,
-                       SampleFormat format = SampleFormat::Float);
+                       const WriteOptions& options = {});
 
-// True for the formats written 8-bit sRGB by write_image: all but the
-// linear float formats (EXR, Radiance HDR, PFM, FITS).
+// The sample type an output gets unless one is asked: float formats (EXR,
+// Radiance HDR, FITS, Zfile, PFM) float, or half where every input stores
+// half and the format holds it; the others integer, 16-bit where the input's
+// integer samples have 16 bits or more (`integer_bits`) and the format holds
+// them, else 8-bit.
+SampleFormat default_sample_format(const std::string& path, bool input_half = false,
+                                   int integer_bits = 0);
+// True for the formats written as 8-bit sRGB by default (default_sample_format
+// is an integer type): all but the float formats.
 bool is_8bit_format(const std::string& path);
+// True when the output's format holds samples of type `f` (written and read
+// back as that type by OpenImageIO 2.4's writer, measured); `held` gets
+// what it holds ("uint8 or uint16").
+bool holds_format(const std::string& path, SampleFormat f, std::string* held = nullptr);
+
+// How an output's format carries write_image's metadata (OpenImageIO 2.4's
+// writers, measured): as named string attributes (OpenEXR, PNG), as
+// key=value lines of the ImageDescription for the keys with a ':' in their
+// name, which the writer drops (TIFF, JPEG, HEIF: the one text field they
+// keep whole), or not at all (the others: they keep no text, or cut the
+// description short).
+enum class MetadataCarrier { Named, Description, None };
+MetadataCarrier metadata_carrier(const std::string& path);
+
+// Refuses a write the output's writer would not make as asked: a sample
+// type its format does not hold, a compression name its writer does not
+// take (or would replace by another for these channels or this type: JPEG
+// in TIFF outside 3-channel 8-bit, DWA in one-channel EXR, RLE in Targa of
+// fewer than 3 channels), a quality the name does not take or outside its
+// range. Throws std::invalid_argument saying what the format holds or
+// takes (without the file's name: the caller names it and the option).
+void check_write_options(const std::string& path, int channels, SampleFormat format,
+                         const Compression& compression);
 
 // Refuses, before any work, an output write_image could not make: no
 // writer for its name (or ICO and JPEG 2000, whose writers in OpenImageIO
@@ -263,7 +320,7 @@ void check_output(const std::string& path);
 // it first; a front end calls it as soon as it knows the channels.
 void check_output_image(const std::string& path, int channels, long width = 0, long height = 0,
                         bool half = false);
-// True when the output's format holds half samples (not FITS).
+// True when the output's format holds half samples (OpenEXR, TIFF).
 bool holds_half(const std::string& path);
 
 // The sRGB transfer functions (IEC 61966-2-1), on [0, 1] (outside, the

@@ -479,18 +479,67 @@ def read_image(path: Union[str, "os.PathLike[str]"]) -> np.ndarray:
     return _core._read_image(_path("path", path))
 
 
+_DTYPES = {"uint8": "uint8", "uint16": "uint16", "half": "half", "float": "float",
+           np.dtype(np.uint8): "uint8", np.dtype(np.uint16): "uint16",
+           np.dtype(np.float16): "half", np.dtype(np.float32): "float"}
+
+
+def _dtype(dtype, half: bool) -> str:
+    """write_image's sample type: "" for the format's default."""
+    if dtype is None:
+        return "half" if half else ""
+    if isinstance(dtype, str):
+        if dtype not in _DTYPES:
+            raise ValueError(f'dtype={dtype!r}: expected "uint8", "uint16", "half" or "float"')
+        name = dtype
+    else:
+        try:
+            name = _DTYPES.get(np.dtype(dtype))
+        except TypeError:
+            name = None
+        if name is None:
+            raise _wrong("dtype", dtype, '"uint8", "uint16", "half", "float" (or numpy\'s uint8, '
+                                         'uint16, float16, float32) or None')
+    if half and name != "half":
+        raise ValueError(f"half=True and dtype={dtype!r}: give one")
+    return name
+
+
 def write_image(path: Union[str, "os.PathLike[str]"], image: np.ndarray, *,
-                channel_names: Sequence[str] = (), alpha: int = -1, half: bool = False) -> None:
-    """Writes an image as siproject writes its outputs: EXR (and other float
-    formats) in float, or half (magnitudes past half's largest value, 65504,
-    clamped there with a RuntimeWarning, as siproject -d half does); 8-bit
-    formats (PNG, JPEG...) sRGB-encoded and clamped to [0, 1]. The file
-    replaces an existing one only once written whole; a signal that ends the
-    process meanwhile (SIGTERM, SIGHUP...) removes the partial file."""
+                channel_names: Sequence[str] = (), alpha: int = -1, half: bool = False,
+                dtype=None, compression: Optional[str] = None,
+                quality: Optional[int] = None) -> None:
+    """Writes an image as siproject writes its outputs. `dtype` is the
+    file's sample type, as siproject's -d: "uint8" or "uint16" (or numpy's
+    uint8, uint16), sRGB-encoded and clamped to [0, 1]; "half" or "float"
+    (float16, float32), linear. None: the format's default, float for EXR
+    (and the other float formats), uint8 for PNG, JPEG, TIFF... `half=True`
+    is dtype="half": magnitudes past half's largest value, 65504, are
+    clamped there with a RuntimeWarning, as siproject -d half does.
+    `compression` ("zip", "piz", "dwaa:45", "lzw", "jpeg:90"...) and
+    `quality` (1 to 100) as siproject's --compression and --quality; a type
+    the format does not hold, or a compression its writer does not take, is
+    a ValueError. The file replaces an existing one only once written whole;
+    a signal that ends the process meanwhile (SIGTERM, SIGHUP...) removes the
+    partial file."""
     if isinstance(channel_names, str) or not all(isinstance(n, str) for n in channel_names):
         raise _wrong("channel_names", channel_names, "a sequence of strings")
-    clamped = _core._write_image(_path("path", path), _samples(image), list(channel_names),
-                                 _whole("alpha", alpha), _flag("half", half))
+    half = _flag("half", half)
+    kind = _dtype(dtype, half)
+    if compression is not None and not isinstance(compression, str):
+        raise _wrong("compression", compression, 'a string ("zip", "piz", "lzw", "jpeg:90"...) or None')
+    if quality is not None and (_is_bool(quality) or not isinstance(quality, numbers.Integral)):
+        raise _wrong("quality", quality, "a whole number 1 to 100 (int) or None")
+    if quality is not None and not 1 <= quality <= 100:
+        raise ValueError(f"quality={quality!r}: expected 1 to 100")
+    try:
+        clamped = _core._write_image(_path("path", path), _samples(image), list(channel_names),
+                                     _whole("alpha", alpha), kind, compression or "",
+                                     int(quality or 0))
+    except ValueError as e:  # half=True asked for the type: named as the caller spelt it
+        if dtype is None and str(e).startswith("dtype='half': "):
+            raise ValueError("half=True: " + str(e)[len("dtype='half': "):]) from None
+        raise
     if clamped:
         _warnings.warn(f"write_image(): half=True: {clamped} samples beyond +-65504 clamped there",
                        RuntimeWarning, stacklevel=2)
