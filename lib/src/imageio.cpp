@@ -879,12 +879,42 @@ bool half_to_float(const std::uint16_t* in, float* out, std::size_t n) {
   return finite;
 }
 
+void decode_to_linear(const Transfer& t, float* v, std::size_t n, int channels, int alpha,
+                      std::size_t k0) {
+  if (t.kind == Transfer::Linear) return;
+  const std::size_t C = std::size_t(channels);
+  for (std::size_t q = 0; q < n; ++q) {
+    if (int((k0 + q) % C) == alpha) continue;
+    v[q] = t.kind == Transfer::SRGB ? srgb_to_linear(v[q])
+                                    : float(std::pow(std::max(0.0, double(v[q])), t.gamma));
+  }
+}
+
+Image linear_image(const SampleView& v) {
+  Image img(v.width, v.height, v.channels);
+  const std::size_t n = img.data.size();
+  const TypeDesc from = v.type == SampleType::UInt8    ? TypeDesc::UINT8
+                        : v.type == SampleType::UInt16 ? TypeDesc::UINT16
+                        : v.type == SampleType::Half   ? TypeDesc::HALF
+                                                       : TypeDesc::FLOAT;
+  for (long r = 0; r < v.height; ++r)  // a row at a time: OpenImageIO counts values in int
+    if (!OIIO::convert_pixel_values(from, v.row(r), TypeDesc::FLOAT, img.row(r), int(v.row_size())))
+      throw std::logic_error("linear_image(): the samples were not converted");
+  decode_to_linear(default_transfer(v.is_integer(), ""), img.data.data(), n, v.channels, -1);
+  return img;
+}
+
 Image read_image(const std::string& path) {
   ImageReader r(path);
   Image img(r.width(), r.height(), r.channels());
   const long strip = r.preferred_strip();
-  for (long y = 0; y < r.height(); y += strip)
-    r.read_rows(y, std::min(r.height(), y + strip), img.row(y));
+  const Transfer t = r.transfer();
+  for (long y = 0; y < r.height(); y += strip) {
+    const long y1 = std::min(r.height(), y + strip);
+    r.read_rows(y, y1, img.row(y));
+    decode_to_linear(t, img.row(y), std::size_t(y1 - y) * r.width() * r.channels(), r.channels(),
+                     r.alpha_channel());
+  }
   return img;
 }
 

@@ -5,6 +5,7 @@ uint8 or uint16 array, is decoded as sRGB, projected and encoded again to
 same image as the file that holds it; input_transfer / --input-transfer
 states another transfer."""
 
+import json
 import os
 import subprocess
 
@@ -66,8 +67,9 @@ def greys(tmp_path_factory):
 def test_flat_128_stays_128_through_siproject(greys, name):
     d, files = greys
     path, bits = files[name]
-    # the input holds 128 (JPEG's flat blocks included: a DC term only)
-    np.testing.assert_allclose(siproject.read_image(path), 128 / 255, rtol=1e-7)
+    # the input holds 128 (JPEG's flat blocks included: a DC term only),
+    # read in linear light
+    np.testing.assert_allclose(siproject.read_image(path), LINEAR_128, rtol=1e-6)
     out = d / (name + ".out.png")
     run(path, "-o", out, "--factor", "2", "-d", "uint8")
     got = np.asarray(Image.open(out))
@@ -161,3 +163,52 @@ def test_photo_array_range(greys):
 def test_other_integer_arrays_refused():
     with pytest.raises(ValueError, match="int64"):
         siproject.project(np.full((8, 8, 3), 1, np.int64), factor=2)
+
+
+SIMETRICS = os.environ.get("SIMETRICS", "simetrics")
+
+
+@pytest.mark.parametrize("name", ["oiio8.tif", "oiio16.png", "pil8.png", "pil16.tif"])
+def test_read_image_is_linear_light(greys, name):
+    """read_image decodes integer files as siproject's inputs are decoded:
+    a flat 128 reads as sRGB's 128 / 255 in linear light, and writing it back
+    to an 8-bit PNG gives 128 again."""
+    path, _ = greys[1][name]
+    a = siproject.read_image(path)
+    np.testing.assert_allclose(a, LINEAR_128, rtol=1e-6)
+
+
+def test_integer_arrays_written_as_they_mean(tmp_path):
+    """write_image of a uint8 or uint16 array writes what the samples mean: an
+    8-bit PNG holds the same codes, an EXR the linear values, and a
+    read_image -> write_image round trip of a PNG keeps every code."""
+    codes = np.arange(256, dtype=np.uint8).reshape(16, 16)
+    siproject.write_image(tmp_path / "u8.png", codes)
+    assert np.array_equal(np.asarray(Image.open(tmp_path / "u8.png")), codes)
+    siproject.write_image(tmp_path / "u8.exr", codes)
+    np.testing.assert_allclose(siproject.read_image(tmp_path / "u8.exr")[:, :, 0],
+                               srgb_to_linear(codes / 255.0), rtol=2e-6, atol=1e-9)
+    siproject.write_image(tmp_path / "again.png", siproject.read_image(tmp_path / "u8.png"))
+    assert np.array_equal(np.asarray(Image.open(tmp_path / "again.png")), codes)
+    words = (np.arange(256, dtype=np.uint16) * 257).reshape(16, 16)
+    siproject.write_image(tmp_path / "u16.png", words, dtype="uint16")
+    assert np.array_equal(np.asarray(Image.open(tmp_path / "u16.png")), words)
+
+
+def test_measures_of_integer_arrays_are_the_files(greys, tmp_path):
+    """The measures take uint8 arrays as the files that hold them: the same
+    numbers as the images read from those files, and as simetrics prints."""
+    rng = np.random.default_rng(11)
+    a = rng.integers(0, 256, (H, W, 3), dtype=np.uint8)
+    b = np.clip(a.astype(int) + rng.integers(-9, 10, a.shape), 0, 255).astype(np.uint8)
+    Image.fromarray(a).save(tmp_path / "a.png")
+    Image.fromarray(b).save(tmp_path / "b.png")
+    fa, fb = siproject.read_image(tmp_path / "a.png"), siproject.read_image(tmp_path / "b.png")
+    assert siproject.rms_difference(a, b) == siproject.rms_difference(fa, fb)
+    assert siproject.psnr(a, b) == siproject.psnr(fa, fb)
+    assert siproject.highpass_share(a) == siproject.highpass_share(fa)
+    assert siproject.rms_difference(a, b) > 0.01  # in linear light, not codes 0..255 (about 5)
+    r = subprocess.run([SIMETRICS, tmp_path / "a.png", "--reference", tmp_path / "b.png",
+                        "--json"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["rms"] == pytest.approx(siproject.rms_difference(a, b), rel=1e-12)

@@ -488,6 +488,22 @@ PYBIND11_MODULE(_core, m) {
     d["max"] = r.max;
     return d;
   });
+  // uint8 or uint16 (H, W, C), C-contiguous: float32 in linear light, as
+  // the same samples in a file read.
+  m.def("_to_linear", [](py::array a) {
+    const char kind = a.dtype().kind();
+    const auto size = a.itemsize();
+    if (a.ndim() != 3 || !(a.flags() & py::array::c_style) || kind != 'u' || (size != 1 && size != 2))
+      throw std::logic_error("_to_linear(): not a C-contiguous uint8 or uint16 (H, W, C) array");
+    const SampleView v(a.data(), long(a.shape(1)), long(a.shape(0)), channel_count(a.shape(2), "array"),
+                       size == 1 ? SampleType::UInt8 : SampleType::UInt16);
+    Image im;
+    {
+      py::gil_scoped_release free;
+      im = linear_image(v);
+    }
+    return to_array(std::move(im));
+  });
   m.def("_read_image", [](const std::string& path) {
     return translated(false, [&] {
       Image im;

@@ -223,7 +223,21 @@ struct BandSource {
 long read_bands(const std::vector<BandSource>& sources, const BandPartition& bands, long strip,
                 int workers, bool half, const BandCallbacks& callbacks);
 
-// Reads a whole image as float.
+// Decodes n interleaved samples of `channels` channels to linear light by
+// `t` (the first at channel k0 % channels), the alpha channel (-1: none)
+// left as stored.
+void decode_to_linear(const Transfer& t, float* v, std::size_t n, int channels, int alpha,
+                      std::size_t k0 = 0);
+
+// Samples in memory as float in linear light, by the rule files follow:
+// integer samples scaled to [0, 1] as OpenImageIO converts a file's and
+// decoded as sRGB (default_transfer, no colour space: every channel), float
+// and half as they are.
+Image linear_image(const SampleView& samples);
+
+// Reads a whole image as float, in linear light: display-encoded samples
+// decoded by the file's transfer (ImageReader::transfer(), the one rule of
+// default_transfer) as siproject decodes its inputs.
 Image read_image(const std::string& path);
 
 // A writer's compression as oiiotool's --compression spells it: a name and

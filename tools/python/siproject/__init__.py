@@ -188,6 +188,16 @@ def _samples(input: Input):
     return np.ascontiguousarray(a)
 
 
+def _image(image):
+    """An image for the measures and write_image: float32 or float16 as it
+    is, uint8 and uint16 in linear light (scaled to [0, 1] and decoded from
+    sRGB, as the same samples read from a file)."""
+    a = _samples(image)
+    if a.dtype in (np.uint8, np.uint16):
+        a = _core._to_linear(a)
+    return a
+
+
 def _threads(threads) -> int:
     return _whole("threads", threads)
 
@@ -376,7 +386,7 @@ class Coefficients:
 def highpass_share(image: np.ndarray, cutoff: Union[float, Sequence[float]] = 0.25):
     """Share of the luminance's DFT energy (mean removed) above `cutoff`
     cycles per pixel (one number, or a list for a list of cutoffs)."""
-    a = _samples(image)
+    a = _image(image)
     single = np.ndim(cutoff) == 0
     cutoffs = [cutoff] if single else list(cutoff)
     shares = _core._highpass_shares(a, [_number("cutoff", c) for c in cutoffs])
@@ -386,12 +396,12 @@ def highpass_share(image: np.ndarray, cutoff: Union[float, Sequence[float]] = 0.
 def rms_difference(a: np.ndarray, b: np.ndarray, *, border: int = 0) -> float:
     """RMS over every channel of a - b, leaving out `border` pixels along
     each edge (images of one size)."""
-    return _core._rms_difference(_samples(a), _samples(b), _whole("border", border, _LONG_RANGE))
+    return _core._rms_difference(_image(a), _image(b), _whole("border", border, _LONG_RANGE))
 
 
 def psnr(a: np.ndarray, b: np.ndarray, *, peak: float = 1.0, border: int = 0) -> float:
     """20 log10(peak / rms_difference(a, b)) in dB (infinite when equal)."""
-    return _core._psnr(_samples(a), _samples(b), _number("peak", peak),
+    return _core._psnr(_image(a), _image(b), _number("peak", peak),
                        _whole("border", border, _LONG_RANGE))
 
 
@@ -413,7 +423,7 @@ class Reference:
     """
 
     def __init__(self, truth: np.ndarray, *, border: float = 0.0, threads: int = 0):
-        self._r = _core.L2Reference(_samples(truth), _number("border", border), _threads(threads))
+        self._r = _core.L2Reference(_image(truth), _number("border", border), _threads(threads))
 
     border = property(lambda self: self._r.border)
     array = property(lambda self: self._r.array)
@@ -444,7 +454,7 @@ def l2_error(k: Coefficients, truth: Optional[Union[np.ndarray, Reference]] = No
             raise ValueError(f"l2_error(): border {border:g} given with a Reference made with "
                              f"border {truth.border:g}")
         return truth.l2_error(k)
-    return _core._l2_error(_coefficients(k), None if truth is None else _samples(truth),
+    return _core._l2_error(_coefficients(k), None if truth is None else _image(truth),
                            _number("zoneplate", zoneplate, optional=True),
                            _whole("samples_per_pixel", samples_per_pixel),
                            0.0 if border is None else border)
@@ -456,20 +466,20 @@ def overshoot(output: np.ndarray, input: np.ndarray, *, neighbourhood: float = 1
     its pixels (the same frame, any ratio): a dict of max_overshoot,
     max_undershoot, pixels, pixels_out_of_range, negative_pixels,
     negative_energy, min and max."""
-    return _core._overshoot(_samples(output), _samples(input),
+    return _core._overshoot(_image(output), _image(input),
                             _number("neighbourhood", neighbourhood),
                             _number("tolerance", tolerance), _whole("border", border, _LONG_RANGE))
 
 
 def luminance(image: np.ndarray) -> np.ndarray:
     """Rec. 709 luminance of linear RGB (channel 0 for one or two channels)."""
-    return _core._luminance(_samples(image))
+    return _core._luminance(_image(image))
 
 
 def srgb8(image: np.ndarray) -> np.ndarray:
     """Linear values as the 8-bit sRGB an 8-bit output file holds (every
     channel encoded and clamped to [0, 1]), uint8 of the same shape."""
-    encoded = _core._srgb8(_samples(image))
+    encoded = _core._srgb8(_image(image))
     return encoded[:, :, 0] if _grey(image) else encoded
 
 
@@ -533,7 +543,7 @@ def write_image(path: Union[str, "os.PathLike[str]"], image: np.ndarray, *,
     if quality is not None and not 1 <= quality <= 100:
         raise ValueError(f"quality={quality!r}: expected 1 to 100")
     try:
-        clamped = _core._write_image(_path("path", path), _samples(image), list(channel_names),
+        clamped = _core._write_image(_path("path", path), _image(image), list(channel_names),
                                      _whole("alpha", alpha), kind, compression or "",
                                      int(quality or 0))
     except ValueError as e:  # half=True asked for the type: named as the caller spelt it
