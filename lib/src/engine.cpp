@@ -373,8 +373,6 @@ NonFiniteReport acquire_in_bands(const InputSet& in, const Reading& g, const Ban
     rows_done += bands.end(b) - bands.begin(b);
     if (progress) progress(double(rows_done) / bands.rows());
   };
-  if constexpr (std::is_same_v<Whole, HexAcquisition>)
-    cb.stopped = [&](long b) { whole.abandon(b); };  // later bands waiting on it give up
   return read_grid(g, bands, cb, bad);
 }
 
@@ -442,7 +440,7 @@ NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop,
 // The hexagonal lattice: each strip through the stages (scanned row by
 // row, then the rest column piece by column piece, on the band's threads),
 // then added whole (HexAcquisition::Band: a coefficient row that two bands
-// reach takes their terms in band order).
+// reach takes their partial sums in band order).
 NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop,
                                   const SampleStages& stages, HexAcquisition& hexagonal,
                                   LocalRange& local, const std::function<void(double)>& progress,
