@@ -81,6 +81,9 @@ struct CartesianSpace {
   // table from coefficients to those points, the centred display's (the
   // continuous L2 error's plan).
   static AxisWeights sample_weights(const Coefficients& k, int axis, long count);
+  // f_app at a grid of points is a product of per-axis tables
+  // (sample_weights): the metrics' separable plans apply.
+  static constexpr bool sampled_by_axes = true;
   static std::string generator_name(const Coefficients& k);
   static double radius(const Coefficients& k);  // of the generator, in lattice steps
   // The frame's own size in output pixels (its coefficient grid's, here).
@@ -112,6 +115,7 @@ struct HexagonalSpace {
   static void prefilter(Coefficients& k, int threads, PrefilterMethod method);  // FFT only
   static Image resample(const Coefficients& k, const Display& display, long W, long H, int threads);
   static double evaluate(const Coefficients& k, Vec2 x, int channel);
+  static constexpr bool sampled_by_axes = false;  // the metrics evaluate f_app on the grid
   static std::string generator_name(const Coefficients& k);
   static double radius(const Coefficients& k);
   static std::pair<long, long> frame(const Coefficients& k);  // the grid also covers a margin
