@@ -59,9 +59,8 @@ TEST_F(Engine, FilesAndMemoryGiveSiprojectsBits) {
     Method method;
     Display display;
   };
-  Space cubic, mitchell, hexq;
-  mitchell.generator = Kernel::mitchell();
-  hexq.kind = SpaceKind::Hexagonal;
+  const Space cubic = CartesianSpace{}, mitchell = CartesianSpace{Kernel::mitchell()},
+              hexq = HexagonalSpace{};
   const Case cases[] = {
       {"--factor 3", cubic, Method::MinError, Display::antialiased_2x2()},
       {"--factor 3 --generator mitchell", mitchell, Method::Conventional, Display::centred()},
@@ -134,13 +133,12 @@ TEST_F(Engine, RequestsItCannotDoAreRequestErrors) {
   rq.inputs = {ProjectionInput::memory(img)};
   rq.width = 16;
   rq.height = 16;
-  rq.space.kind = SpaceKind::Hexagonal;
-  rq.space.density = 1e30;
+  rq.space = HexagonalSpace{2, 1e30};
   EXPECT_THROW(project(rq), RequestError);
   rq.space = Space{};
   rq.width = 3000000000;
   EXPECT_THROW(project(rq), RequestError);
   rq.width = 16;
-  rq.space.generator = Kernel::mitchell();
+  rq.space = CartesianSpace{Kernel::mitchell()};
   EXPECT_THROW(project(rq), RequestError);  // min-error needs a B-spline
 }

@@ -7,12 +7,15 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <functional>
 #include <random>
+#include <thread>
 #include <tuple>
 #include <unordered_map>
 
+#include "sis/hex_acquisition.h"
 #include "sis/hex_projection.h"
 #include "sis/space.h"
 #include "sis/projection.h"
@@ -202,62 +205,144 @@ TEST(HexAcquisition, AlignedRuleIsExactForPolynomialsOfTheGeneratorsDegree) {
       }
 }
 
+// The aligned rule's direct double sum (hex_acquisition.h) at stored
+// coefficient (i, j), channel c: r[n] = sum over the aligned grid points g
+// of M(g - x_n) / (s1 s2) times f~(g), f~ the 4 x 4 cubic Lagrange
+// interpolant of the extended samples (taps -1 .. 2 around floor of g's
+// sample coordinates). s1, s2 as the header defines them.
+double direct_aligned_sum(const Grid<double>& in, double W, double H, const HexLayout& L, int n,
+                          Boundary b, long i, long j, int c) {
+  const long win = in.width, hin = in.height;
+  const double dx = W / win, dy = H / hin;
+  auto lagrange = [](double f) {
+    return std::array<double, 4>{-f * (f - 1) * (f - 2) / 6, (f + 1) * (f - 1) * (f - 2) / 2,
+                                 -(f + 1) * f * (f - 2) / 2, (f + 1) * f * (f - 1) / 6};
+  };
+  const BoxSpline& B = BoxSpline::hexagonal(n);
+  const int s1 = std::max(2, 2 * int(std::lround(L.step() / dx / 2)));
+  const int s2 = std::max(1, int(std::lround(L.row_step() / dy)));
+  const double dxa = L.step() / s1, dya = L.row_step() / s2;
+  const Vec2 o = L.lattice.origin();
+  const Vec2 p = L.position(i, j);
+  const Vec2 un = L.lattice.coordinates(p);
+  double ref = 0;
+  const long mc = std::lround((p.x - o.x) / dxa), rc = std::lround((p.y - o.y) / dya);
+  for (long r = rc - n * s2; r <= rc + n * s2; ++r)
+    for (long mm = mc - n * s1; mm <= mc + n * s1; ++mm) {
+      const double gx = o.x + mm * dxa, gy = o.y + r * dya;
+      const Vec2 u = L.lattice.coordinates({gx, gy});
+      const double w = B.eval(u.x - un.x, u.y - un.y) / (s1 * s2);
+      if (w == 0) continue;
+      const double px = gx / dx - 0.5, py = gy / dy - 0.5;
+      const long qx = long(std::floor(px)) - 1, qy = long(std::floor(py)) - 1;
+      const auto lx = lagrange(px - std::floor(px)), ly = lagrange(py - std::floor(py));
+      double f = 0;
+      for (int a = 0; a < 4; ++a)
+        for (int bb = 0; bb < 4; ++bb)
+          f += ly[a] * lx[bb] * in.at(extend_index(qx + bb, win, b), extend_index(qy + a, hin, b), c);
+      ref += w * f;
+    }
+  return ref;
+}
+
 TEST(HexAcquisition, AlignedRuleMatchesItsDirectDoubleSum) {
-  // r[n] = sum over the aligned grid points g of M(g - x_n) / (s1 s2) times
-  // f~(g), f~ the 4 x 4 cubic Lagrange interpolant of the extended samples
-  // (taps -1 .. 2 around floor of g's sample coordinates), every stored
-  // coefficient, both rules, non-integer factor; double samples (float
-  // samples keep the interpolated rows in float).
+  // Every stored coefficient, both rules, non-integer factor; double samples
+  // (float samples keep the interpolated rows in float).
   const long win = 37, hin = 29;
   const double W = 9, H = 7, dx = W / win, dy = H / hin;
   const Image samples = random_image(win, hin, 2, 44);
   Grid<double> in(win, hin, 2);
   std::copy(samples.data.begin(), samples.data.end(), in.data.begin());
-  auto lagrange = [](double f) {
-    return std::array<double, 4>{-f * (f - 1) * (f - 2) / 6, (f + 1) * (f - 1) * (f - 2) / 2,
-                                 -(f + 1) * f * (f - 2) / 2, (f + 1) * f * (f - 1) / 6};
-  };
   for (int n = 1; n <= kMaxBoxSplineOrder; ++n)
     for (Boundary b : kRules) {
       const HexLayout L = hex_layout(1.0, W, H, 3);
       const HexAcquisitionPlan plan(win, hin, 2, W, H, L, n, b);
       const Coefficients got = acquire(in, plan, 2);
-      const BoxSpline& B = BoxSpline::hexagonal(n);
-      const int s1 = std::max(2, 2 * int(std::lround(L.step() / dx / 2)));
-      const int s2 = std::max(1, int(std::lround(L.row_step() / dy)));
-      EXPECT_EQ(plan.aligned().s1, s1);
-      EXPECT_EQ(plan.aligned().s2, s2);
-      const double dxa = L.step() / s1, dya = L.row_step() / s2;
-      const Vec2 o = L.lattice.origin();
+      EXPECT_EQ(plan.aligned().s1, std::max(2, 2 * int(std::lround(L.step() / dx / 2))));
+      EXPECT_EQ(plan.aligned().s2, std::max(1, int(std::lround(L.row_step() / dy))));
       double worst = 0;
       for (long j = 0; j < L.rows; ++j)
-        for (long i = 0; i < L.columns; ++i) {
-          const Vec2 p = L.position(i, j);
-          const Vec2 un = L.lattice.coordinates(p);
-          double ref[2] = {0, 0};
-          const long mc = std::lround((p.x - o.x) / dxa), rc = std::lround((p.y - o.y) / dya);
-          for (long r = rc - n * s2; r <= rc + n * s2; ++r)
-            for (long mm = mc - n * s1; mm <= mc + n * s1; ++mm) {
-              const double gx = o.x + mm * dxa, gy = o.y + r * dya;
-              const Vec2 u = L.lattice.coordinates({gx, gy});
-              const double w = B.eval(u.x - un.x, u.y - un.y) / (s1 * s2);
-              if (w == 0) continue;
-              const double px = gx / dx - 0.5, py = gy / dy - 0.5;
-              const long qx = long(std::floor(px)) - 1, qy = long(std::floor(py)) - 1;
-              const auto lx = lagrange(px - std::floor(px)), ly = lagrange(py - std::floor(py));
-              for (int c = 0; c < 2; ++c) {
-                double f = 0;
-                for (int a = 0; a < 4; ++a)
-                  for (int bb = 0; bb < 4; ++bb)
-                    f += ly[a] * lx[bb] *
-                         in.at(extend_index(qx + bb, win, b), extend_index(qy + a, hin, b), c);
-                ref[c] += w * f;
-              }
-            }
-          for (int c = 0; c < 2; ++c) worst = std::max(worst, std::abs(got.c.at(i, j, c) - ref[c]));
-        }
+        for (long i = 0; i < L.columns; ++i)
+          for (int c = 0; c < 2; ++c)
+            worst = std::max(worst, std::abs(got.c.at(i, j, c) -
+                                             direct_aligned_sum(in, W, H, L, n, b, i, j, c)));
       EXPECT_LT(worst, 1e-13) << n << " " << boundary_name(b);
     }
+}
+
+TEST(HexAcquisition, BandsMatchTheDirectSumAndGiveTheSameBitsInAnyOrder) {
+  // Bands of 1, 3 and 16 rows (29 rows: coefficient rows whose input rows
+  // lie in up to a dozen bands; periodic: bands at both ends). In order
+  // (any strip and thread count), and band by band on two threads at once
+  // in decreasing order: the same bits; against the direct double sum:
+  // rounding (double samples).
+  const long win = 37, hin = 29;
+  const double W = 9, H = 7;
+  const Image samples = random_image(win, hin, 3, 45);
+  Grid<double> in(win, hin, 3);
+  std::copy(samples.data.begin(), samples.data.end(), in.data.begin());
+  for (int n = 1; n <= kMaxBoxSplineOrder; ++n)
+    for (Boundary b : kRules)
+      for (long band_rows : {1L, 3L, 16L}) {
+        SCOPED_TRACE("order " + std::to_string(n) + " " + boundary_name(b) + ", bands of " +
+                     std::to_string(band_rows));
+        const HexLayout L = hex_layout(1.0, W, H, 3);
+        const HexAcquisitionPlan plan(win, hin, 3, W, H, L, n, b);
+        HexAcquisition whole(plan, 1, band_rows);
+        ASSERT_EQ(whole.bands().count(), (hin + band_rows - 1) / band_rows);
+        for (long y = 0; y < hin; y += 4) whole.add_rows(y, std::min(hin, y + 4), in.row(y));
+        const Coefficients ref = whole.finish();
+        double worst = 0;
+        for (long j = 0; j < L.rows; ++j)
+          for (long i = 0; i < L.columns; ++i)
+            for (int c = 0; c < 3; ++c)
+              worst = std::max(worst, std::abs(ref.c.at(i, j, c) -
+                                               direct_aligned_sum(in, W, H, L, n, b, i, j, c)));
+        EXPECT_LT(worst, 1e-13);
+        for (int threads : {2, 3})
+          for (long strip : {1L, 5L, 29L}) {
+            HexAcquisition a(plan, threads, band_rows);
+            for (long y = 0; y < hin; y += strip) a.add_rows(y, std::min(hin, y + strip), in.row(y));
+            EXPECT_EQ(a.finish().c.data, ref.c.data) << threads << " threads in order, strips of "
+                                                     << strip;
+          }
+        HexAcquisition a(plan, 1, band_rows);
+        const BandPartition& bands = a.bands();
+        std::atomic<long> next{bands.count() - 1};
+        auto worker = [&] {
+          HexAcquisition::Band band(a);
+          for (long k; (k = next--) >= 0;) {
+            band.begin(k);
+            for (long y = bands.begin(k); y < bands.end(k); y += 2)
+              band.add_rows(y, std::min(bands.end(k), y + 2), in.row(y));
+            band.end();
+          }
+        };
+        std::thread other(worker);
+        worker();
+        other.join();
+        EXPECT_EQ(a.finish().c.data, ref.c.data) << "bands at once, in decreasing order";
+      }
+}
+
+TEST(HexAcquisition, BandsMustBeTakenWhole) {
+  const Image in = random_image(20, 12, 1, 1);
+  const HexLayout L = hex_layout(1.0, 5, 3, 2);
+  const HexAcquisitionPlan plan(20, 12, 1, 5, 3, L, 1, Boundary::Mirror);
+  HexAcquisition a(plan, 1, 4);
+  HexAcquisition::Band band(a);
+  EXPECT_THROW(band.add_rows(0, 2, in.row(0)), std::logic_error);  // no band begun
+  EXPECT_THROW(band.begin(3), std::logic_error);                   // bands 0, 1, 2
+  band.begin(1);
+  EXPECT_THROW(band.begin(2), std::logic_error);                   // band 1 not ended
+  EXPECT_THROW(band.add_rows(0, 2, in.row(0)), std::logic_error);  // not band 1's rows
+  band.add_rows(4, 6, in.row(4));
+  EXPECT_THROW(band.end(), std::logic_error);                      // rows 6, 7 missing
+  EXPECT_THROW(band.add_rows(6, 9, in.row(6)), std::logic_error);  // past the band
+  band.add_rows(6, 8, in.row(6));
+  band.end();
+  EXPECT_THROW(band.begin(1), std::logic_error);                   // taken before
+  EXPECT_THROW(a.finish(), std::logic_error);                      // bands 0 and 2 missing
 }
 
 TEST(HexAcquisition, BitIdenticalForAnyStripAndThreadCount) {

@@ -299,12 +299,7 @@ int run(const Options& o) {
       std::fprintf(stderr, "siproject: memory: about %s needed, %s available\n",
                    format_bytes(f.estimated_bytes).c_str(),
                    available_memory() == UINT64_MAX ? "no limit" : format_bytes(available_memory()).c_str());
-    if (space_of(k) == SpaceKind::Hexagonal)
-      std::fprintf(stderr,
-                   "siproject: hexagonal lattice, %.6g points per output pixel (step %.6g), "
-                   "%ld x %ld offset-row coefficients over the frame and its margin\n",
-                   1.0 / std::abs(k.lattice.determinant()), k.lattice.matrix()[0], k.c.width,
-                   k.c.height);
+    std::fputs(visit_space(k, [&](auto space) { return space.describe(k); }).c_str(), stderr);
     std::fprintf(stderr, "siproject: output range [%g, %g], %ld negative samples", before.min,
                  before.max, before.negative);
     if (own_range)

@@ -44,7 +44,7 @@ Coefficients project_noise(const Image& in, long W, long H, const MethodSpec& m,
   rq.inputs = {ProjectionInput::memory(in, "noise")};
   rq.width = W;
   rq.height = H;
-  rq.space.generator = m.kernel;
+  rq.space = CartesianSpace{m.kernel};
   rq.method = m.method;
   rq.boundary = rule;
   rq.float_coefficients = false;

@@ -14,12 +14,11 @@
 #include <thread>
 #include <type_traits>
 
-#include "sis/box_spline.h"
-#include "sis/hex_lattice.h"
 #include "sis/memory.h"
 #include "sis/parallel.h"
 #include "sis/projection.h"
 #include "sis/space.h"
+#include "space_sinks.h"
 
 namespace sis {
 
@@ -30,38 +29,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
-// True when no sample is NaN or infinite. A branch-free scan of the bits
-// (exponent all ones plus one carries into the sign bit) that compilers
-// vectorise: the common case costs little.
-bool all_finite(const float* v, std::size_t n) {
-  std::uint32_t carry = 0;
-  for (std::size_t q = 0; q < n; ++q) {
-    std::uint32_t u;
-    std::memcpy(&u, v + q, sizeof u);
-    carry |= (u & 0x7f800000u) + 0x00800000u;
-  }
-  return !(carry & 0x80000000u);
-}
-
-// Values [k0, k1) of a row as float in v (converted from `half_row` when
-// given, else already there): false when one is not finite.
-bool row_values(const std::uint16_t* half_row, long k0, long k1, float* v) {
-  const std::size_t n = std::size_t(k1 - k0);
-  return half_row ? half_to_float(half_row + k0, v, n) : all_finite(v, n);
-}
-
-// Zeroes the non-finite values of v[0, n) (values k0... of their row); returns
-// how many, the first's index in *first.
-long zero_nonfinite(float* v, std::size_t n, long k0, long* first) {
-  long count = 0;
-  for (std::size_t q = 0; q < n; ++q)
-    if (!std::isfinite(v[q])) {
-      if (count++ == 0) *first = k0 + long(q);
-      v[q] = 0.0f;
-    }
-  return count;
 }
 
 // Adds a strip's non-finite samples to n: per strip row r of `rows`, count[r]
@@ -256,7 +223,6 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs) {
 
 namespace {
 
-using ValueHook = std::function<void(float*, std::size_t, std::size_t)>;
 
 // Rows per strip of in-memory bands: as a file's (about 1 MB of float).
 long memory_strip_rows(long width, int channels) {
@@ -319,23 +285,28 @@ NonFiniteReport read_grid(const Reading& g, const BandPartition& bands, const Ba
   return all;
 }
 
-// Reads the grid band by band into the lattice's acquisition (Whole:
-// Acquisition or HexAcquisition), a band of it and of the local range per
-// worker thread: each worker decodes its band's strips and uses them while
-// they are in its cache; other formats than OpenEXR are read by one worker.
-// add_strip(worker, strip, acquisition band, range band, bad, bad_first)
-// converts, checks, decodes, folds, compresses and adds a strip, counting
-// the non-finite samples of each strip row (bad) and the first's value
-// index (bad_first, the least). Stops at the first band with a non-finite
-// sample when `stop`.
-template <typename Whole, typename AddStrip>
-NonFiniteReport acquire_in_bands(const InputSet& in, const Reading& g, const BandPartition& bands,
-                                 Whole& whole, LocalRange& local, int inner, bool stop,
+// Reads the grid band by band into a space's acquisition sink (Sink:
+// CartesianSink or HexagonalSink, lib/src/space_sinks.h), a band of it and
+// of the local range per worker thread: each worker decodes its band's
+// strips and uses them while they are in its cache; other formats than
+// OpenEXR are read by one worker. The sink's band converts, checks,
+// decodes, folds, compresses and adds each strip, counting the non-finite
+// samples of each strip row (bad) and the first's value index (bad_first,
+// the least). Stops at the first band with a non-finite sample when `stop`.
+template <typename Sink>
+NonFiniteReport acquire_in_bands(const InputSet& in, int threads, const SampleStages& stages,
+                                 Sink& sink, LocalRange& local, bool stop,
                                  const std::function<void(double)>& progress,
-                                 const std::function<void()>& interrupt,
-                                 const AddStrip& add_strip) {
+                                 const std::function<void()>& interrupt) {
+  const BandPartition& bands = sink.bands();
+  const Reading g = plan_reading(in, threads, bands);
+  StripFormat format;
+  format.stages = &stages;
+  format.half = g.half;
+  format.row_size = std::size_t(in.width) * in.channels;
+  format.threads = g.workers > 1 ? 1 : threads;  // threads within a band
   struct Worker {
-    std::unique_ptr<typename Whole::Band> acquisition;
+    std::unique_ptr<typename Sink::Band> acquisition;
     std::unique_ptr<LocalRange::Band> range;
     std::vector<std::atomic<long>> bad, bad_first;  // per strip row (pieces of a row run at once)
     explicit Worker(long rows) : bad(rows), bad_first(rows) {}
@@ -343,7 +314,7 @@ NonFiniteReport acquire_in_bands(const InputSet& in, const Reading& g, const Ban
   std::vector<std::unique_ptr<Worker>> w;
   for (int t = 0; t < g.workers; ++t) {
     w.push_back(std::make_unique<Worker>(g.strip));
-    w.back()->acquisition = std::make_unique<typename Whole::Band>(whole, inner);
+    w.back()->acquisition = std::make_unique<typename Sink::Band>(sink, format);
     w.back()->range = std::make_unique<LocalRange::Band>(local);
   }
   std::vector<NonFiniteReport> bad(bands.count());  // per band, each written by the thread taking it
@@ -360,7 +331,7 @@ NonFiniteReport acquire_in_bands(const InputSet& in, const Reading& g, const Ban
     const long y = s.global, rows = s.y1 - s.y0, y1 = y + rows;
     for (long r = 0; r < rows; ++r) k.bad[r] = 0, k.bad_first[r] = LONG_MAX;
     k.range->open(y, y1);
-    add_strip(t, s, *k.acquisition, *k.range, k.bad, k.bad_first);
+    k.acquisition->add_strip(s, *k.range, k.bad, k.bad_first);
     k.range->close(y1);
     NonFiniteReport& n = bad[bands.of(y)];
     add_nonfinite(n, k.bad, k.bad_first, rows, s.y0, in.channels, *s.path);
@@ -373,106 +344,7 @@ NonFiniteReport acquire_in_bands(const InputSet& in, const Reading& g, const Ban
     rows_done += bands.end(b) - bands.begin(b);
     if (progress) progress(double(rows_done) / bands.rows());
   };
-  if constexpr (std::is_same_v<Whole, HexAcquisition>)
-    cb.stopped = [&](long b) { whole.abandon(b); };  // later bands waiting on it give up
   return read_grid(g, bands, cb, bad);
-}
-
-// The least of `seen` and `value`, kept in `seen` (pieces of a row run at once).
-void keep_least(std::atomic<long>& seen, long value) {
-  long s = seen.load();
-  while (value < s && !seen.compare_exchange_weak(s, value)) {
-  }
-}
-
-// What every piece of a strip's samples passes on the worker that decoded
-// it, before the acquisition sums it, on both lattices: the non-finite scan
-// (each such sample counted and zeroed), then the sRGB decoding, the local
-// range (the samples folded in) and the highlight compression. A piece is
-// values [k0, k1) of one strip row, interleaved.
-struct SampleStages {
-  using Counts = std::vector<std::atomic<long>>;
-  ValueHook decode, compress;  // empty: not asked for
-
-  // The piece as float in v (converted from the strip's half row where
-  // given), its non-finite samples counted into bad[r] (the least first
-  // value index into bad_first[r]) and zeroed.
-  static void scan(const std::uint16_t* half_row, long r, long k0, long k1, float* v, Counts& bad,
-                   Counts& bad_first) {
-    if (row_values(half_row, k0, k1, v)) return;
-    long first_bad = -1;
-    bad[r] += zero_nonfinite(v, std::size_t(k1 - k0), k0, &first_bad);
-    keep_least(bad_first[r], first_bad);
-  }
-  // The scanned piece at image row y: decoded, folded into the range, compressed.
-  void transform(long y, long k0, long k1, float* v, LocalRange::Band& range) const {
-    const std::size_t n = std::size_t(k1 - k0);
-    if (decode) decode(v, n, std::size_t(k0));
-    range.fold(y, k0, k1, v);
-    if (compress) compress(v, n, std::size_t(k0));
-  }
-};
-
-// The Cartesian lattice: each strip handed to the acquisition in pieces of
-// columns, each piece through the stages on the worker threads while the
-// sums use it.
-NonFiniteReport acquire_cartesian(const InputSet& in, int threads, bool stop,
-                                  const SampleStages& stages, Acquisition& acquisition,
-                                  LocalRange& local, const BandPartition& bands,
-                                  const std::function<void(double)>& progress,
-                                  const std::function<void()>& interrupt) {
-  const Reading g = plan_reading(in, threads, bands);
-  const bool half = g.half;
-  const std::size_t row_size = std::size_t(in.width) * in.channels;
-  auto add_strip = [&](int, const Strip& s, Acquisition::Band& acq, LocalRange::Band& range,
-                       SampleStages::Counts& bad, SampleStages::Counts& bad_first) {
-    const long y = s.global, y1 = y + s.y1 - s.y0;
-    acq.add_rows(y, y1, [&](long gy, long k0, long k1, float* scratch) {
-      const long r = gy - y;
-      float* v = half ? scratch : s.floats + r * row_size + k0;
-      stages.scan(half ? s.half + r * row_size : nullptr, r, k0, k1, v, bad, bad_first);
-      stages.transform(gy, k0, k1, v, range);
-      return static_cast<const float*>(v);
-    });
-  };
-  return acquire_in_bands(in, g, bands, acquisition, local, g.workers > 1 ? 1 : threads, stop,
-                          progress, interrupt, add_strip);
-}
-
-// The hexagonal lattice: each strip through the stages (scanned row by
-// row, then the rest column piece by column piece, on the band's threads),
-// then added whole (HexAcquisition::Band: a coefficient row that two bands
-// reach takes their terms in band order).
-NonFiniteReport acquire_hexagonal(const InputSet& in, int threads, bool stop,
-                                  const SampleStages& stages, HexAcquisition& hexagonal,
-                                  LocalRange& local, const std::function<void(double)>& progress,
-                                  const std::function<void()>& interrupt) {
-  const BandPartition& bands = hexagonal.bands();
-  const Reading g = plan_reading(in, threads, bands);
-  const bool half = g.half;
-  const std::size_t row_size = std::size_t(in.width) * in.channels;
-  const int inner = g.workers > 1 ? 1 : threads;  // threads within a band
-  std::vector<Buffer<float>> converted(g.workers);  // per worker: a half strip as float
-  auto add_strip = [&](int t, const Strip& s, HexAcquisition::Band& acq, LocalRange::Band& range,
-                       SampleStages::Counts& bad, SampleStages::Counts& bad_first) {
-    const long y = s.global, rows = s.y1 - s.y0, y1 = y + rows;
-    float* data = s.floats;
-    if (half) {
-      converted[t].resize(std::size_t(rows) * row_size);
-      data = converted[t].data();
-    }
-    parallel_for(rows, inner, [&](long r0, long r1) {
-      for (long r = r0; r < r1; ++r)
-        stages.scan(half ? s.half + r * row_size : nullptr, r, 0, long(row_size),
-                    data + r * row_size, bad, bad_first);
-    });
-    parallel_for(long(row_size), inner, [&](long k0, long k1) {
-      for (long r = 0; r < rows; ++r) stages.transform(y + r, k0, k1, data + r * row_size + k0, range);
-    });
-    acq.add_rows(y, y1, data);
-  };
-  return acquire_in_bands(in, g, bands, hexagonal, local, inner, stop, progress, interrupt,
-                          add_strip);
 }
 
 }  // namespace
@@ -492,64 +364,22 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
   }
   const int threads = std::max(1, rq.threads);
   const int C = in.channels;
-  const bool hex = rq.space.kind == SpaceKind::Hexagonal;
-  if (hex && rq.method != Method::MinError)
-    throw RequestError("--lattice hex has the min-error method only");
-  if (hex && rq.prefilter != PrefilterMethod::FFT)
-    throw RequestError("--lattice hex has the fft prefilter only");
-  const Kernel& generator = rq.space.generator;  // the Cartesian space's
-  if (!hex && rq.method == Method::MinError && !generator.is_bspline())
-    throw RequestError("--method min-error needs a B-spline generator (box, tent, quadratic, cubic, "
-                       "bspline:N), not " + generator.name() + "; use --method conventional");
-  std::uint64_t coefficients = std::uint64_t(W) * std::uint64_t(H);
-  double hex_tables = 0;
-  const double density = rq.space.density;
-  if (hex) {
-    if (!(std::isfinite(density) && density > 0)) {
-      std::ostringstream m;
-      m << "--density " << density << ": expected a finite number above 0";
-      throw RequestError(m.str());
-    }
-    // The hexagonal acquisition sums samples under each lattice point: it
-    // needs at least one sample per lattice step (it has no interpolation
-    // model of the input, as the Cartesian one has where it upsamples), and
-    // a lattice step no larger than the frame. Checked before the layout,
-    // whose search for a transform size would run on an absurd grid.
-    const double h = Lattice::hexagonal(density).matrix()[0];
-    const double spacing = std::max(double(W) / double(in.width), double(H) / double(in.height));
-    std::ostringstream m;
-    m.precision(4);
-    if (h < spacing) {
-      m << "--lattice hex: the lattice's step (" << h << " output pixels at --density " << density
-        << ") is finer than the input's sample spacing (" << spacing
-        << " output pixels); the hexagonal acquisition needs a sample per lattice step: use "
-           "--density at most "
-        << 2 / (std::sqrt(3.0) * spacing * spacing) << ", or a smaller output";
-      throw RequestError(m.str());
-    }
-    if (h > double(std::min(W, H))) {
-      m << "--density " << density << ": the hexagonal lattice's step (" << h
-        << " output pixels) is larger than the " << W << " x " << H << " frame";
-      throw RequestError(m.str());
-    }
-    const HexLayout layout = hex_layout(density, double(W), double(H), hex_default_margin(rq.space.hex_order));
-    coefficients = std::uint64_t(layout.columns) * std::uint64_t(layout.rows);
-    // its table grows with the input's samples per lattice cell
-    hex_tables = hex_acquisition_bytes(in.width, in.height, C, double(W), double(H), layout,
-                                       rq.space.hex_order, threads, 0, sizeof(float));
-    const std::uint64_t available = available_memory();
-    if (hex_tables > double(available))
-      throw RequestError("--lattice hex: the hexagonal acquisition of " + std::to_string(in.width) +
-                         " x " + std::to_string(in.height) + " samples onto a " + std::to_string(W) +
-                         " x " + std::to_string(H) + " output needs about " +
-                         format_bytes(std::uint64_t(hex_tables)) + " of memory, more than the " +
-                         format_bytes(available) +
-                         " available (its weight table grows with the samples per output pixel); "
-                         "ask for a larger output (--size or --factor) or use --lattice cartesian");
-  }
-  p.estimated_bytes = projection_bytes(W, H, C, coefficients, true, rq.coefficient_file, threads,
-                                       hex ? hex_tables
-                                           : table_bytes(W, in.width, H, in.height, generator.radius()));
+  SpaceRequest srq;
+  srq.input_width = in.width;
+  srq.input_height = in.height;
+  srq.channels = C;
+  srq.width = W;
+  srq.height = H;
+  srq.method = rq.method;
+  srq.prefilter = rq.prefilter;
+  srq.boundary = rq.boundary;
+  srq.threads = threads;
+  const SpaceBudget budget = visit_space(rq.space, [&](const auto& space) {
+    space.check(srq);
+    return space.budget(srq);
+  });
+  p.estimated_bytes = projection_bytes(W, H, C, budget.coefficients, true, rq.coefficient_file,
+                                       threads, budget.tables);
   check_memory(p.estimated_bytes, "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
                                       std::to_string(C) + " output");
 
@@ -581,28 +411,15 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
   NonFiniteReport bad;
   Coefficients k;
   const auto t = Clock::now();
-  if (!hex) {
-    const AcquisitionPlan plan(in.width, in.height, C, double(W), double(H), Lattice::cartesian(),
-                               generator, rq.boundary, rq.method);
-    Acquisition cartesian(plan, threads);
-    p.local_range = std::make_unique<LocalRange>(in.width, in.height, C, W, H, plan.bands().band_rows());
-    bad = acquire_cartesian(in, threads, stop, stages, cartesian, *p.local_range, plan.bands(),
-                            rq.progress, rq.interrupt);
-    if (!bad.count || !stop) k = cartesian.finish();
-  } else {
+  visit_space(rq.space, [&](const auto& space) {
     // The plan (the weights of every input row and column, some
     // milliseconds) is made while the first strips decode.
-    const HexLayout layout =
-        hex_layout(density, double(W), double(H), hex_default_margin(rq.space.hex_order));
-    const HexAcquisitionPlan plan(in.width, in.height, C, double(W), double(H), layout,
-                                  rq.space.hex_order, rq.boundary);
-    HexAcquisition hexagonal(plan, threads);
-    p.local_range =
-        std::make_unique<LocalRange>(in.width, in.height, C, W, H, hexagonal.bands().band_rows());
-    bad = acquire_hexagonal(in, threads, stop, stages, hexagonal, *p.local_range, rq.progress,
-                            rq.interrupt);
-    if (!bad.count || !stop) k = hexagonal.finish();
-  }
+    const auto sink = space.sink(srq);
+    p.local_range = std::make_unique<LocalRange>(in.width, in.height, C, W, H, sink->bands().band_rows());
+    bad = acquire_in_bands(in, threads, stages, *sink, *p.local_range, stop, rq.progress,
+                           rq.interrupt);
+    if (!bad.count || !stop) k = sink->finish();
+  });
   p.acquire_seconds = seconds_since(t);
   for (auto& r : p.inputs.readers) r->release();  // the decoders' buffers, before the later stages
   if (bad.count) {

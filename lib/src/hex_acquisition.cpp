@@ -90,14 +90,20 @@ double hex_acquisition_bytes(long input_width, long input_height, int channels,
   const double plan = trows * (wt * 8 + 8) + columns * (8 + 32 + 8) +
                       (columns * (layout.step() / a.s1) / dx + 8) * 8 +
                       double(input_height) * 48 + extended_rows * 8;
-  // per band at once: a piece of interpolated rows, the band's input rows
-  // kept for deferred coefficient rows, the per-row and per-coefficient-row
+  // per band at once: a piece of interpolated rows, the per-coefficient-row
   // state, each thread's combined table row
   const double rows = band_rows < 1 ? kHexBandRows : band_rows;
-  const double band = kPieceRows * columns * channels * sample_bytes +
-                      rows * double(input_width) * channels * sample_bytes +
-                      double(layout.rows) * 64 + wt * 8;
-  return plan + (bands_at_once < 1 ? 1 : bands_at_once) * band +
+  const double band = kPieceRows * columns * channels * sample_bytes + double(layout.rows) * 16 +
+                      wt * 8;
+  // The slots: a coefficient row's inputs span (2 n - 1) lattice rows and
+  // the 4 taps of the vertical interpolation on each side, so a band
+  // boundary (the wrap of the periodic rule one more) lies in at most
+  // 2 n + 1 + 4 dy / hy + 1 coefficient rows' spans; each of them has a slot
+  // per boundary it holds, of a coefficient row's values in double.
+  const double boundaries = std::ceil(input_height / rows) + 1;
+  const double slots = boundaries * (2.0 * order + 2 + 4 * dy / layout.row_step()) *
+                       double(layout.columns) * channels * 8;
+  return plan + (bands_at_once < 1 ? 1 : bands_at_once) * band + slots +
          double(layout.rows) * 8 * (input_height / rows + 4);
 }
 
@@ -166,11 +172,12 @@ HexAcquisition::HexAcquisition(const HexAcquisitionPlan& plan, int threads, long
       threads_(threads < 1 ? 1 : threads),
       acc_(plan.layout().columns, plan.layout().rows, plan.channels()),
       bands_(plan.input_height(), band_rows < 1 ? kHexBandRows : band_rows),
-      row_bands_(plan.layout().rows),
-      done_(plan.layout().rows, 0),
-      ended_(bands_.count(), 0) {
+      ended_(bands_.count()) {
+  for (auto& e : ended_) e = 0;
+  std::vector<std::vector<long>> row_bands(plan.layout().rows);  // ascending: b increases
   for (long b = 0; b < bands_.count(); ++b)
-    for (long j : reached(bands_.begin(b), bands_.end(b))) row_bands_[j].push_back(b);
+    for (long j : reached(bands_.begin(b), bands_.end(b))) row_bands[j].push_back(b);
+  slots_ = BandSlots<double>(row_bands, bands_.count(), acc_.row_size());
 }
 
 HexAcquisition::~HexAcquisition() = default;
@@ -255,7 +262,7 @@ void aligned_terms(const double* u, int n, const S* src, double* a, int C) {
 
 template <typename S>
 void HexAcquisition::accumulate(const S* strip, long y0, long y1, const std::vector<long>& work,
-                                int threads) {
+                                double* const* dest, int threads) {
   if (work.empty()) return;
   const HexLayout& L = plan_.layout();
   const int C = plan_.channels();
@@ -273,7 +280,7 @@ void HexAcquisition::accumulate(const S* strip, long y0, long y1, const std::vec
       std::vector<double> u(wt);
       for (long w = w0; w < w1; ++w) {
         const long j = work[w];
-        double* acc = acc_.row(j);
+        double* acc = dest[j];
         const long shift = (g.s1 / 2) * (j & 1);
         for (long k = y0; k < y1; ++k) {
           const S* hk = strip + erow * (k - y0);
@@ -330,20 +337,16 @@ void HexAcquisition::add_in_order(long y0, long y1, const T* rows) {
   next_row_ = y1;
 }
 
-void HexAcquisition::abandon(long band) {
-  std::lock_guard<std::mutex> lock(m_);
-  abandoned_ = std::min(abandoned_, band);
-  cv_.notify_all();
-}
-
 HexAcquisition::Band::Band(HexAcquisition& whole, int threads)
-    : whole_(whole), threads_(threads < 1 ? 1 : threads), state_(whole.plan_.layout().rows, 0) {}
+    : whole_(whole), threads_(threads < 1 ? 1 : threads), dest_(whole.plan_.layout().rows, nullptr) {}
 
 HexAcquisition::Band::~Band() = default;
 
 void HexAcquisition::Band::begin(long band) {
   if (band_ >= 0) throw std::logic_error("HexAcquisition::Band::begin(): the last band did not end");
-  if (band < 0 || band >= whole_.bands_.count() || whole_.ended_[band])
+  char untaken = 0;
+  if (band < 0 || band >= whole_.bands_.count() ||
+      !whole_.ended_[band].compare_exchange_strong(untaken, 1))
     throw std::logic_error("HexAcquisition::Band::begin(): band " + std::to_string(band) +
                            " is not one left to take");
   band_ = band;
@@ -355,12 +358,12 @@ void HexAcquisition::Band::add_rows(long y0, long y1, const double* rows) { add(
 
 template <typename T>
 void HexAcquisition::add_pieces(long y0, long y1, const T* rows, const std::vector<long>& js,
-                                std::vector<T>& ext, int threads) {
+                                double* const* dest, std::vector<T>& ext, int threads) {
   const std::size_t in_row = std::size_t(plan_.input_width()) * plan_.channels();
   for (long y = y0; y < y1; y += kPieceRows) {
     const long e = std::min(y1, y + kPieceRows);
     interpolate(y, e, rows + (y - y0) * in_row, ext, threads);
-    accumulate(ext.data(), y, e, js, threads);
+    accumulate(ext.data(), y, e, js, dest, threads);
   }
 }
 
@@ -369,90 +372,48 @@ void HexAcquisition::Band::add(long y0, long y1, const T* rows) {
   if (band_ < 0 || y0 != next_row_ || y1 > whole_.bands_.end(band_) || y1 < y0)
     throw std::logic_error("HexAcquisition::Band::add_rows(): rows out of the band's order");
   if (y1 == y0) return;
-  // The coefficient rows it reaches: added to now where the earlier bands
-  // that reach them are done with them (decided at the band's first touch),
-  // else kept for end().
-  std::vector<long> now, later;
-  {
-    std::lock_guard<std::mutex> lock(whole_.m_);
-    for (long j : whole_.reached(y0, y1)) {
-      if (!state_[j]) {
-        const auto& rb = whole_.row_bands_[j];
-        const long position = long(std::find(rb.begin(), rb.end(), band_) - rb.begin());
-        state_[j] = whole_.done_[j] == position ? 1 : 2;
-        touched_.push_back(j);
-      }
-      (state_[j] == 1 ? now : later).push_back(j);
-    }
+  // The coefficient rows it reaches, each at its first touch given its
+  // destination: the row itself for its first band (zero until then), else
+  // this band's slot, zeroed.
+  const std::vector<long> js = whole_.reached(y0, y1);
+  for (long j : js) {
+    if (dest_[j]) continue;
+    double* slot = whole_.slots_.slot(j, band_);
+    if (slot) std::fill(slot, slot + whole_.acc_.row_size(), 0.0);
+    dest_[j] = slot ? slot : whole_.acc_.row(j);
+    touched_.push_back(j);
   }
-  if (!now.empty()) whole_.add_pieces(y0, y1, rows, now, extended<T>(), threads_);
-  if (!later.empty()) {
-    // only the rows that reach them (rows between that do not add nothing),
-    // as they came: interpolated again in end()
-    long a = y1, b = y0;
-    for (long k = y0; k < y1; ++k)
-      for (long j : whole_.reached(k, k + 1))
-        if (std::binary_search(later.begin(), later.end(), j)) {
-          a = std::min(a, k);
-          b = std::max(b, k + 1);
-          break;
-        }
-    const std::size_t in_row = std::size_t(whole_.plan_.input_width()) * whole_.plan_.channels();
-    Kept k{a, b, {}, {}, later};
-    if constexpr (std::is_same_v<T, float>)
-      k.rows_f.assign(rows + (a - y0) * in_row, rows + (b - y0) * in_row);
-    else
-      k.rows_d.assign(rows + (a - y0) * in_row, rows + (b - y0) * in_row);
-    if (b > a) kept_.push_back(std::move(k));
-  }
+  whole_.add_pieces(y0, y1, rows, js, dest_.data(), extended<T>(), threads_);
   next_row_ = y1;
 }
 
 void HexAcquisition::Band::end() {
   if (band_ < 0 || next_row_ != whole_.bands_.end(band_))
     throw std::logic_error("HexAcquisition::Band::end(): the band's rows are not all added");
-  // The kept rows' terms, once the earlier bands are done with their rows.
-  std::vector<long> deferred;
-  for (long j : touched_)
-    if (state_[j] == 2) deferred.push_back(j);
-  // Each kept strip's terms go to its deferred rows once the earlier bands
-  // are done with all of them: each row still takes its terms in input row
-  // order, and each strip is interpolated once.
-  for (long j : deferred) {
-    const auto& rb = whole_.row_bands_[j];
-    const int position = int(std::find(rb.begin(), rb.end(), band_) - rb.begin());
-    std::unique_lock<std::mutex> lock(whole_.m_);
-    // it waits on earlier bands only: one of them abandoned, it gives up
-    whole_.cv_.wait(lock, [&] { return whole_.done_[j] == position || whole_.abandoned_ < band_; });
-    if (whole_.done_[j] != position)
-      throw std::runtime_error("HexAcquisition::Band::end(): an earlier band was abandoned");
-  }
-  for (const Kept& k : kept_) {
-    if (!k.rows_f.empty())
-      whole_.add_pieces(k.y0, k.y1, k.rows_f.data(), k.rows, ext_f_, threads_);
-    else
-      whole_.add_pieces(k.y0, k.y1, k.rows_d.data(), k.rows, ext_d_, threads_);
-  }
-  {
-    std::lock_guard<std::mutex> lock(whole_.m_);
-    for (long j : touched_) ++whole_.done_[j];
-    whole_.ended_[band_] = 1;
-  }
-  whole_.cv_.notify_all();
-  for (long j : touched_) state_[j] = 0;
+  for (long j : touched_) dest_[j] = nullptr;
   touched_.clear();
-  kept_.clear();
+  const long b = band_;
   band_ = -1;
+  whole_.ended_[b] = 2;
+  Grid<double>& acc = whole_.acc_;
+  whole_.slots_.ended(b, [&](long j, const double* slot) {
+    double* row = acc.row(j);
+    for (std::size_t q = 0; q < acc.row_size(); ++q) row[q] += slot[q];
+  });
 }
 
 Coefficients HexAcquisition::finish() {
-  const bool all = std::all_of(ended_.begin(), ended_.end(), [](char e) { return e != 0; });
-  if (!all && next_row_ != plan_.input_height()) {
+  const long ended =
+      std::count_if(ended_.begin(), ended_.end(), [](const std::atomic<char>& e) { return e == 2; });
+  if (ended != long(ended_.size())) {
     std::ostringstream m;
-    m << "HexAcquisition::finish(): only " << next_row_ << " of " << plan_.input_height()
-      << " rows were added";
+    m << "HexAcquisition::finish(): only " << ended << " of " << ended_.size()
+      << " bands of rows were added (next row " << next_row_ << " of " << plan_.input_height()
+      << ")";
     throw std::logic_error(m.str());
   }
+  in_order_.reset();
+  slots_ = BandSlots<double>();
   Coefficients out;
   out.c = std::move(acc_);
   out.lattice = plan_.layout().lattice;

@@ -31,7 +31,6 @@
 #include <filesystem>
 #include <sstream>
 
-#include "sis/hex_lattice.h"
 #include "sis/parallel.h"
 #include "sis/space.h"
 
@@ -1469,25 +1468,11 @@ Coefficients read_coefficients(ImageReader& r) {
     const auto o = numbers("sis:lattice_origin", 2);
     const auto L = numbers("sis:lattice_matrix", 4);
     k.lattice = Lattice({o[0], o[1]}, {L[0], L[1], L[2], L[3]});
-    const std::string lattice = r.attribute("sis:lattice"), storage = r.attribute("sis:storage");
-    if (lattice == "hexagonal") {
-      if (!k.lattice.is_hexagonal() || storage != "offset-rows")
-        throw std::invalid_argument("sis:lattice hexagonal needs a hexagonal sis:lattice_matrix "
-                                    "and sis:storage offset-rows");
-      k.box_spline = &BoxSpline::hexagonal(BoxSpline::parse(r.attribute("sis:generator")).order());
-    } else if (lattice == "cartesian") {
-      if (!k.lattice.separable() || !(L[0] > 0) || !(L[3] > 0) || storage != "rows")
-        throw std::invalid_argument("sis:lattice cartesian needs a diagonal sis:lattice_matrix of "
-                                    "positive steps and sis:storage rows");
-      k.generator = Kernel::parse(r.attribute("sis:generator"));
-    } else {
+    // the space's own metadata, read by the space its sis:lattice names
+    const std::string lattice = r.attribute("sis:lattice");
+    const Attributes attribute = [&](const std::string& key) { return r.attribute(key); };
+    if (!visit_lattice_name(lattice, [&](auto space) { space.read_metadata(attribute, k); }))
       throw std::invalid_argument("sis:lattice '" + lattice + "': expected cartesian or hexagonal");
-    }
-    const std::string degree = r.attribute("sis:degree");
-    const int want = k.box_spline ? 3 * k.box_spline->order() - 2 : k.generator.degree();
-    if (degree != std::to_string(want))
-      throw std::invalid_argument("sis:degree '" + degree + "' is not the degree of generator " +
-                                  r.attribute("sis:generator"));
     k.boundary = parse_boundary(r.attribute("sis:boundary"));
     const std::string method = r.attribute("sis:method");
     if (method != "min-error" && method != "conventional")
@@ -1522,22 +1507,10 @@ Coefficients read_coefficients(ImageReader& r) {
     r.read_rows(y, std::min(r.height(), y + r.preferred_strip()), grid.row(y));
   k.c = Grid<double>(grid.width, grid.height, grid.channels);
   for (std::size_t q = 0; q < grid.data.size(); ++q) k.c.data[q] = grid.data[q];
-  if (space_of(k) == SpaceKind::Hexagonal) {
-    try {
-      hex_layout(k);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(r.path() + ": " + e.what());
-    }
-  }
-  if (k.lattice.separable()) {
-    std::array<long, 2> e{0, 0};
-    try {
-      e = k.lattice.extent(k.image_width, k.image_height);
-    } catch (const std::invalid_argument& ex) {
-      throw InputError(r.path() + ": coefficient file metadata: " + ex.what());
-    }
-    if (e[0] != k.c.width || e[1] != k.c.height)
-      throw InputError(r.path() + ": coefficient grid size does not match its lattice and frame");
+  try {
+    visit_space(k, [&](auto space) { space.check_grid(k); });
+  } catch (const std::invalid_argument& e) {
+    throw InputError(r.path() + ": " + e.what());
   }
   return k;
 }

@@ -298,6 +298,11 @@ std::vector<double> space_key(const Coefficients& k) {
 }
 
 
+// Whether the coefficients' space evaluates on a grid by per-axis tables.
+bool sampled_by_axes(const Coefficients& k) {
+  return visit_space(k, [](auto space) { return decltype(space)::sampled_by_axes; });
+}
+
 // RMS of f_app - f over the centred reference grid of ref_w x ref_h samples
 // inside the border; truth(i, j, c) is f at sample (i, j).
 template <typename Truth>
@@ -490,7 +495,7 @@ double L2Reference::l2_error(const Coefficients& k) {
   if (f.channels != k.c.channels)
     throw std::invalid_argument("l2_error(): reference has " + std::to_string(f.channels) +
                                 " channels, the coefficients " + std::to_string(k.c.channels));
-  if (space_of(k) != SpaceKind::Cartesian)
+  if (!sampled_by_axes(k))
     return l2_on_grid(k, f.width, f.height, border_, threads_, true,
                       [&](long i, long j, int c) { return double(f.at(i, j, c)); });
   const std::vector<double> key = space_key(k);
@@ -532,7 +537,7 @@ double l2_error(const Coefficients& coefficients,
   const long ref_w = std::max(1L, std::lround(k.image_width * samples_per_pixel));
   const long ref_h = std::max(1L, std::lround(k.image_height * samples_per_pixel));
   const double sx = k.image_width / ref_w, sy = k.image_height / ref_h;
-  if (space_of(k) != SpaceKind::Cartesian)
+  if (!sampled_by_axes(k))
     return l2_on_grid(k, ref_w, ref_h, border_output_pixels, threads, truth_on_any_thread,
                       [&](long i, long j, int c) { return truth((i + 0.5) * sx, (j + 0.5) * sy, c); });
   const SamplePlan p = sample_plan(k, ref_w, ref_h, border_output_pixels);
@@ -651,7 +656,7 @@ double zoneplate_l2_error(const Coefficients& coefficients, double K, int sample
   table(ref_w, sx, W, cx, sx_);
   table(ref_h, sy, H, cy, sy_);
   const Coefficients& k = coefficients;
-  if (space_of(k) != SpaceKind::Cartesian)
+  if (!sampled_by_axes(k))
     return l2_on_grid(k, ref_w, ref_h, border_output_pixels, threads, true,
                       [&](long i, long j, int) { return 0.5 + 0.5 * (cx[i] * cy[j] - sx_[i] * sy_[j]); });
   // f = 1/2 + 1/2 (cx cy - sx sy): a = Wy' F Wx is three outer products of

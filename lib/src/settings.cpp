@@ -100,44 +100,23 @@ Resolved resolve(const Settings& o) {
   if (int(bool(o.factor)) + int(!o.size.empty()) + int(bool(o.scale)) > 1)
     throw RequestError("give one of --factor, --size and --scale, not several");
   if (!o.size.empty()) r.size = parse_size(o.size);
-  const bool hex = o.lattice == "hex" || o.lattice == "hexagonal";
-  r.hexagonal = hex;
-  if (!hex && o.lattice != "cartesian")
-    throw RequestError("--lattice '" + o.lattice + "': expected cartesian or hex (hexagonal)");
-  if (!hex && o.density_given) throw RequestError("--density applies to --lattice hex only");
-  if (!hex && o.generator.rfind("hex-", 0) == 0)
-    throw RequestError("--generator " + o.generator + " needs --lattice hex");
-  if (hex) {
-    r.space.kind = SpaceKind::Hexagonal;
-    r.space.hex_order = as_request("--lattice hex: ", [&] {
-      return BoxSpline::parse(o.generator_given ? o.generator : "hex-quartic").order();
-    });
-    r.space.density = o.density;
-  } else {
-    r.space.generator = as_request("--generator: ", [&] { return Kernel::parse(o.generator); });
-  }
-  // A conventional filter named alone means the conventional method.
-  std::string method = o.method;
-  if (!hex && o.generator_given && !o.method_given && !r.space.generator.is_bspline())
-    method = "conventional";
+  r.space = parse_space(o.lattice, o.generator, o.generator_given, o.density, o.density_given);
+  const std::string method = visit_space(r.space, [&](const auto& space) {
+    return space.implied_method(o.method, o.generator_given, o.method_given);
+  });
   as_request("", [&] {
     r.method = parse_method(method);
     r.boundary = parse_boundary(o.boundary);
     if (!o.display.empty()) r.display = Display::parse(o.display);
     return 0;
   });
-  if (!hex && r.method == Method::MinError && !r.space.generator.is_bspline())
-    throw RequestError("--method min-error needs a B-spline generator (box, tent, quadratic, cubic, "
-                       "bspline:N), not " + r.space.generator.name() + "; use --method conventional");
   r.clamp = as_request("--clamp: ", [&] { return parse_clamp(o.clamp); });
   if (o.nonfinite != "error" && o.nonfinite != "zero")
     throw RequestError("--nonfinite '" + o.nonfinite + "': expected error or zero");
   if (o.prefilter != "fft" && o.prefilter != "recursive")
     throw RequestError("--prefilter '" + o.prefilter + "': expected fft or recursive");
-  if (hex && r.method != Method::MinError)
-    throw RequestError("--lattice hex has the min-error method only");
-  if (hex && o.prefilter != "fft") throw RequestError("--lattice hex has the fft prefilter only");
   r.prefilter = o.prefilter == "fft" ? PrefilterMethod::FFT : PrefilterMethod::Recursive;
+  visit_space(r.space, [&](const auto& space) { space.check_options(r.method, r.prefilter); });
   if (!is_auto(o.input_transfer))
     try {
       r.input_transfer = parse_transfer(o.input_transfer);

@@ -82,21 +82,10 @@ struct InputSet {
 // that they tile one grid. Throws InputError naming the file.
 InputSet inspect(const std::vector<ProjectionInput>& inputs);
 
-// The space: a lattice with a generator, from a closed set. Cartesian: the
-// tensor space of `generator` on the output pixels. Hexagonal: the
-// box spline of `hex_order` on a hexagonal lattice of `density` points per
-// output pixel.
-struct Space {
-  SpaceKind kind = SpaceKind::Cartesian;
-  Kernel generator = Kernel::bspline(3);
-  int hex_order = 2;
-  double density = 1.0;
-};
-
 struct ProjectionRequest {
   std::vector<ProjectionInput> inputs;
   long width = 0, height = 0;  // the output frame, in pixels
-  Space space;
+  Space space;  // sis/space.h: CartesianSpace{generator} or HexagonalSpace{order, density}
   Method method = Method::MinError;
   Boundary boundary = Boundary::Mirror;
   PrefilterMethod prefilter = PrefilterMethod::FFT;

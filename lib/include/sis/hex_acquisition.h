@@ -34,10 +34,8 @@
 // Rows stream through: each input row is read once and added to every
 // coefficient whose support holds it or one of its boundary images.
 #include <array>
-#include <climits>
-#include <condition_variable>
+#include <atomic>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -106,13 +104,15 @@ class HexAcquisitionPlan {
 
 // Streams rows through a plan: the whole image in order (add_rows), or band
 // by band on several threads at once (Band). The result does not depend on
-// the strip sizes, the thread count or the path.
+// the strip sizes, the thread count, the path or the order in which bands
+// are taken: the contract of the Cartesian Acquisition (sis/bands.h).
 //
-// Order of the sums: each coefficient's terms are added in increasing input
-// row k (a row's boundary images in increasing extended row), every path.
-// A coefficient row that several bands reach takes the bands' terms in band
-// order: a band that reaches it before the earlier bands are done with it
-// keeps its rows and adds their terms at its end, once they are.
+// Order of the sums: within a band, each coefficient's terms are added in
+// increasing input row k (a row's boundary images in increasing extended
+// row), from zero. A coefficient row that several bands reach is written by
+// its first band, and each later band writes its part into a slot of its
+// own; once the row's last band has ended, the slots are added to the row
+// in band order. No band waits on another.
 class HexAcquisition {
  public:
   // band_rows: input rows per band (< 1: kBandRows, as the Cartesian lattice).
@@ -127,8 +127,7 @@ class HexAcquisition {
 
   // Takes bands: begin(b), the band's rows in order, end(). Bands of one
   // HexAcquisition may run at once on different threads, each taken once,
-  // bands taken in increasing order by each thread (end() may wait for an
-  // earlier band's end).
+  // in any order.
   class Band {
    public:
     explicit Band(HexAcquisition& whole, int threads = 1);
@@ -147,15 +146,8 @@ class HexAcquisition {
     HexAcquisition& whole_;
     int threads_;
     long band_ = -1, next_row_ = 0;
-    std::vector<long> touched_;              // coefficient rows it added to
-    std::vector<char> state_;                // per coefficient row: 0 untouched, 1 adding, 2 deferred
-    struct Kept {                            // rows kept for the deferred coefficient rows
-      long y0, y1;
-      std::vector<float> rows_f;             // the input rows as added, in their own type (float
-      std::vector<double> rows_d;            // or double)
-      std::vector<long> rows;                // the deferred coefficient rows they reach
-    };
-    std::vector<Kept> kept_;
+    std::vector<long> touched_;  // coefficient rows it added to
+    std::vector<double*> dest_;  // per coefficient row it touched: the row, or its slot
     // the current piece of rows, interpolated along x, in the rows' own type
     std::vector<float> ext_f_;
     std::vector<double> ext_d_;
@@ -167,10 +159,6 @@ class HexAcquisition {
         return ext_d_;
     }
   };
-  // A band that will not end (its reading failed or stopped): the later
-  // bands waiting on it give up with an exception instead of waiting; the
-  // earlier ones, which never wait on it, go on to their end.
-  void abandon(long band);
 
   // The acquired r[n] (sis/hex_lattice.h says how Coefficients records them).
   Coefficients finish();
@@ -181,14 +169,8 @@ class HexAcquisition {
   long next_row_ = 0;
   Grid<double> acc_;
   BandPartition bands_;
-  // Per coefficient row: the bands that reach it, in order, and how many of
-  // them are done with it.
-  std::vector<std::vector<long>> row_bands_;
-  std::vector<int> done_;
-  std::vector<char> ended_;
-  std::mutex m_;
-  std::condition_variable cv_;
-  long abandoned_ = LONG_MAX;  // the first band abandoned (LONG_MAX: none)
+  std::vector<std::atomic<char>> ended_;  // per band: 0 untaken, 1 taken, 2 ended
+  BandSlots<double> slots_;               // of the coefficient rows several bands reach
   std::unique_ptr<Band> in_order_;
   template <typename T>
   void add_in_order(long y0, long y1, const T* rows);
@@ -199,23 +181,25 @@ class HexAcquisition {
   std::size_t strip_row_size() const;  // values per interpolated row
   // The coefficient rows rows [y0, y1) reach, in increasing order.
   std::vector<long> reached(long y0, long y1) const;
-  // Adds the terms of the interpolated rows [y0, y1) to the coefficient rows js.
+  // Adds the terms of the interpolated rows [y0, y1) to coefficient rows js,
+  // row j's into dest[j].
   template <typename S>
-  void accumulate(const S* ext, long y0, long y1, const std::vector<long>& js, int threads);
+  void accumulate(const S* ext, long y0, long y1, const std::vector<long>& js,
+                  double* const* dest, int threads);
   // Input rows [y0, y1) interpolated and added to the coefficient rows js a
   // few rows at a time (into ext), in increasing row order.
   template <typename T>
-  void add_pieces(long y0, long y1, const T* rows, const std::vector<long>& js, std::vector<T>& ext,
-                  int threads);
+  void add_pieces(long y0, long y1, const T* rows, const std::vector<long>& js,
+                  double* const* dest, std::vector<T>& ext, int threads);
 };
 
 // The bytes a HexAcquisition of these sizes allocates besides its
 // coefficients, at most, from the sizes alone (before anything is
 // allocated): its plan (the table, (2 n s2 - 1)(2 n s1 + 1) weights, grows
 // with the input's samples per lattice cell; the column taps; the rows'
-// boundary images) and, per band taken at once, a piece of interpolated
-// rows and the band's input rows kept for deferred coefficient rows, in
-// samples of sample_bytes. band_rows < 1: the default bands.
+// boundary images), the slots of the coefficient rows several bands reach
+// and, per band taken at once, a piece of interpolated rows in samples of
+// sample_bytes. band_rows < 1: the default bands.
 double hex_acquisition_bytes(long input_width, long input_height, int channels,
                              double image_width, double image_height, const HexLayout& layout,
                              int order, int bands_at_once, long band_rows, int sample_bytes);

@@ -59,7 +59,6 @@ SizeSpec parse_size(const std::string& spelling);
 // siproject prints ("--generator: unknown generator 'x' ...").
 struct Resolved {
   Space space;
-  bool hexagonal = false;
   Method method = Method::MinError;
   Boundary boundary = Boundary::Mirror;
   std::optional<Display> display;  // none: the method's default

@@ -1,0 +1,45 @@
+#include "space_sinks.h"
+
+#include "sis/parallel.h"
+
+namespace sis {
+
+void CartesianSink::Band::add_strip(const Strip& s, LocalRange::Band& range,
+                                    SampleStages::Counts& bad, SampleStages::Counts& bad_first) {
+  const bool half = format_.half;
+  const std::size_t row_size = format_.row_size;
+  const SampleStages& stages = *format_.stages;
+  const long y = s.global, y1 = y + s.y1 - s.y0;
+  band_.add_rows(y, y1, [&](long gy, long k0, long k1, float* scratch) {
+    const long r = gy - y;
+    float* v = half ? scratch : s.floats + r * row_size + k0;
+    stages.scan(half ? s.half + r * row_size : nullptr, r, k0, k1, v, bad, bad_first);
+    stages.transform(gy, k0, k1, v, range);
+    return static_cast<const float*>(v);
+  });
+}
+
+void HexagonalSink::Band::add_strip(const Strip& s, LocalRange::Band& range,
+                                    SampleStages::Counts& bad, SampleStages::Counts& bad_first) {
+  const bool half = format_.half;
+  const std::size_t row_size = format_.row_size;
+  const SampleStages& stages = *format_.stages;
+  const int inner = format_.threads;
+  const long y = s.global, rows = s.y1 - s.y0, y1 = y + rows;
+  float* data = s.floats;
+  if (half) {
+    converted_.resize(std::size_t(rows) * row_size);
+    data = converted_.data();
+  }
+  parallel_for(rows, inner, [&](long r0, long r1) {
+    for (long r = r0; r < r1; ++r)
+      stages.scan(half ? s.half + r * row_size : nullptr, r, 0, long(row_size),
+                  data + r * row_size, bad, bad_first);
+  });
+  parallel_for(long(row_size), inner, [&](long k0, long k1) {
+    for (long r = 0; r < rows; ++r) stages.transform(y + r, k0, k1, data + r * row_size + k0, range);
+  });
+  band_.add_rows(y, y1, data);
+}
+
+}  // namespace sis

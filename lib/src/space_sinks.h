@@ -1,0 +1,165 @@
+#pragma once
+// The acquisition sinks of the spaces (internal to the library): what the
+// engine's band reading drives, one per space, with the same per-band
+// interface. Each sink owns its acquisition and its band partition; a
+// Band takes bands in any order on any worker thread (begin(b), strips,
+// end()), and every strip passes the sample stages on the worker that
+// decoded it before the space sums it. Both sinks keep per-band partial
+// sums merged in band order (sis/bands.h), so the result is the same bits
+// for any thread count and any order in which the bands are taken.
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "sis/acquisition.h"
+#include "sis/hex_acquisition.h"
+#include "sis/imageio.h"
+#include "sis/range.h"
+
+namespace sis {
+
+using ValueHook = std::function<void(float*, std::size_t, std::size_t)>;
+
+namespace stages {
+// True when no sample is NaN or infinite. A branch-free scan of the bits
+// (exponent all ones plus one carries into the sign bit) that compilers
+// vectorise: the common case costs little.
+inline bool all_finite(const float* v, std::size_t n) {
+  std::uint32_t carry = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    std::uint32_t u;
+    std::memcpy(&u, v + q, sizeof u);
+    carry |= (u & 0x7f800000u) + 0x00800000u;
+  }
+  return !(carry & 0x80000000u);
+}
+
+// Values [k0, k1) of a row as float in v (converted from `half_row` when
+// given, else already there): false when one is not finite.
+inline bool row_values(const std::uint16_t* half_row, long k0, long k1, float* v) {
+  const std::size_t n = std::size_t(k1 - k0);
+  return half_row ? half_to_float(half_row + k0, v, n) : all_finite(v, n);
+}
+
+// Zeroes the non-finite values of v[0, n) (values k0... of their row); returns
+// how many, the first's index in *first.
+inline long zero_nonfinite(float* v, std::size_t n, long k0, long* first) {
+  long count = 0;
+  for (std::size_t q = 0; q < n; ++q)
+    if (!std::isfinite(v[q])) {
+      if (count++ == 0) *first = k0 + long(q);
+      v[q] = 0.0f;
+    }
+  return count;
+}
+
+// The least of `seen` and `value`, kept in `seen` (pieces of a row run at once).
+inline void keep_least(std::atomic<long>& seen, long value) {
+  long s = seen.load();
+  while (value < s && !seen.compare_exchange_weak(s, value)) {
+  }
+}
+}  // namespace stages
+
+// What every piece of a strip's samples passes on the worker that decoded
+// it, before the acquisition sums it, in every space: the non-finite scan
+// (each such sample counted and zeroed), then the sRGB decoding, the local
+// range (the samples folded in) and the highlight compression. A piece is
+// values [k0, k1) of one strip row, interleaved.
+struct SampleStages {
+  using Counts = std::vector<std::atomic<long>>;
+  ValueHook decode, compress;  // empty: not asked for
+
+  // The piece as float in v (converted from the strip's half row where
+  // given), its non-finite samples counted into bad[r] (the least first
+  // value index into bad_first[r]) and zeroed.
+  static void scan(const std::uint16_t* half_row, long r, long k0, long k1, float* v, Counts& bad,
+                   Counts& bad_first) {
+    if (stages::row_values(half_row, k0, k1, v)) return;
+    long first_bad = -1;
+    bad[r] += stages::zero_nonfinite(v, std::size_t(k1 - k0), k0, &first_bad);
+    stages::keep_least(bad_first[r], first_bad);
+  }
+  // The scanned piece at image row y: decoded, folded into the range, compressed.
+  void transform(long y, long k0, long k1, float* v, LocalRange::Band& range) const {
+    const std::size_t n = std::size_t(k1 - k0);
+    if (decode) decode(v, n, std::size_t(k0));
+    range.fold(y, k0, k1, v);
+    if (compress) compress(v, n, std::size_t(k0));
+  }
+};
+
+// What a sink's band needs of the reading: the stages, whether strips come
+// as half, the values per input row, threads within the band.
+struct StripFormat {
+  const SampleStages* stages = nullptr;
+  bool half = false;
+  std::size_t row_size = 0;
+  int threads = 1;
+};
+
+// The Cartesian space's sink: each strip handed to the acquisition in
+// pieces of columns, each piece through the stages on the worker threads
+// while the sums use it (the fused path).
+class CartesianSink {
+ public:
+  CartesianSink(long input_width, long input_height, int channels, long W, long H,
+                const Kernel& generator, Boundary boundary, Method method, int threads)
+      : plan_(input_width, input_height, channels, double(W), double(H), Lattice::cartesian(),
+              generator, boundary, method),
+        whole_(plan_, threads) {}
+  const BandPartition& bands() const { return plan_.bands(); }
+  class Band {
+   public:
+    Band(CartesianSink& sink, const StripFormat& format) : format_(format), band_(sink.whole_, format.threads) {}
+    void begin(long b) { band_.begin(b); }
+    void add_strip(const Strip& s, LocalRange::Band& range, SampleStages::Counts& bad,
+                   SampleStages::Counts& bad_first);
+    void end() { band_.end(); }
+
+   private:
+    StripFormat format_;
+    Acquisition::Band band_;
+  };
+  Coefficients finish() { return whole_.finish(); }
+
+ private:
+  AcquisitionPlan plan_;
+  Acquisition whole_;
+};
+
+// The hexagonal space's sink: each strip through the stages (scanned row
+// by row, then the rest column piece by column piece, on the band's
+// threads), then added whole.
+class HexagonalSink {
+ public:
+  HexagonalSink(long input_width, long input_height, int channels, long W, long H,
+                const HexLayout& layout, int order, Boundary boundary, int threads)
+      : plan_(input_width, input_height, channels, double(W), double(H), layout, order, boundary),
+        whole_(plan_, threads) {}
+  const BandPartition& bands() const { return whole_.bands(); }
+  class Band {
+   public:
+    Band(HexagonalSink& sink, const StripFormat& format) : format_(format), band_(sink.whole_, format.threads) {}
+    void begin(long b) { band_.begin(b); }
+    void add_strip(const Strip& s, LocalRange::Band& range, SampleStages::Counts& bad,
+                   SampleStages::Counts& bad_first);
+    void end() { band_.end(); }
+
+   private:
+    StripFormat format_;
+    HexAcquisition::Band band_;
+    Buffer<float> converted_;  // a half strip as float
+  };
+  Coefficients finish() { return whole_.finish(); }
+
+ private:
+  HexAcquisitionPlan plan_;
+  HexAcquisition whole_;
+};
+
+}  // namespace sis
