@@ -395,14 +395,9 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
   ValueHook& decode = stages.decode;
   ValueHook& compress = stages.compress;
   p.transfer = rq.input_transfer ? *rq.input_transfer : in.transfer;
-  if (p.transfer.kind == Transfer::SRGB)
-    decode = [&](float* v, std::size_t n, std::size_t k0) {
-      for_colour(v, n, [](double x) { return double(srgb_to_linear(float(x))); }, k0);
-    };
-  if (p.transfer.kind == Transfer::Power)
-    decode = [&, g = p.transfer.gamma](float* v, std::size_t n, std::size_t k0) {
-      for (std::size_t q = 0; q < n; ++q)
-        if (int((k0 + q) % C) != alpha) v[q] = float(std::pow(std::max(0.0, double(v[q])), g));
+  if (p.transfer.kind != Transfer::Linear)
+    decode = [&, t = p.transfer](float* v, std::size_t n, std::size_t k0) {
+      decode_to_linear(t, v, n, C, alpha, k0);
     };
   if (rq.highlight_compress)
     compress = [&](float* v, std::size_t n, std::size_t k0) { for_colour(v, n, highlight_compress, k0); };
