@@ -269,8 +269,9 @@ TEST(Scattered, FitReproducesASplineOfTheSpace) {
     const Coefficients k = project_scattered(s, t, o);
     for (long n = 0; n < 48; ++n) EXPECT_NEAR(k.c.data[n], c[n], 1e-10) << name(cs) << " n " << n;
     // The normalised rule is not exact for it (a check that the test can fail).
-    if (cs.degree > 0)
+    if (cs.degree > 0) {
       EXPECT_GT(max_abs_diff(project_scattered(s, t).c, k.c), 1e-3) << name(cs);
+    }
   }
 }
 
