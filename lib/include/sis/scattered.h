@@ -64,7 +64,10 @@ struct ScatteredTarget {
 };
 
 struct ScatteredOptions {
-  ScatteredRule rule = ScatteredRule::NormalisedSum;
+  // The fit by default: on the zone plate at 4 rays per pixel it came within
+  // 7 % of the regular grid's L2 error, the normalised sum 3.2 times it
+  // (docs/design.md section 11).
+  ScatteredRule rule = ScatteredRule::LeastSquares;
   // LeastSquares: at most this many preconditioned CG iterations, fewer
   // when the residual's norm falls to tolerance times b's (per channel).
   int iterations = 5;
