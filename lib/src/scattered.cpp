@@ -153,19 +153,22 @@ void for_each_sample(const ScatteredSamples& s, const ScatteredTarget& t, const 
   }
 }
 
-// out += sum_i w_i v_i phi_i,n (the splat), v_i = values[i * C ...].
+// out += sum_i w_i v_i phi_i,n (the splat), v_i = values[i * C ...]; and
+// where given, weights += sum_i w_i phi_i,n in the same pass.
 void splat(const ScatteredSamples& s, const ScatteredTarget& t, const Geometry& g,
-           const double* values, Grid<double>& out) {
+           const double* values, Grid<double>& out, Grid<double>* weights = nullptr) {
   const int C = out.channels;
   for_each_sample(s, t, g, [&](long i, double w, const AxisTaps& tx, const AxisTaps& ty) {
     const double* v = values + std::size_t(i) * C;
     for (int b = 0; b < ty.count; ++b) {
       double* row = out.row(ty.index[b]);
+      double* wrow = weights ? weights->row(ty.index[b]) : nullptr;
       const double wy = w * ty.weight[b];
       for (int a = 0; a < tx.count; ++a) {
         const double ww = wy * tx.weight[a];
         double* o = row + tx.index[a] * C;
         for (int c = 0; c < C; ++c) o[c] += ww * v[c];
+        if (wrow) wrow[tx.index[a]] += ww;
       }
     }
   });
@@ -242,22 +245,7 @@ std::size_t ScatteredAcquisition::bytes() const {
 
 void ScatteredAcquisition::add(const ScatteredSamples& s) {
   check(s, target_, channels_);
-  const Geometry g = geometry(target_);
-  const int C = channels_;
-  for_each_sample(s, target_, g, [&](long i, double w, const AxisTaps& tx, const AxisTaps& ty) {
-    const double* v = s.values.data() + std::size_t(i) * C;
-    for (int b = 0; b < ty.count; ++b) {
-      double* row = num_.row(ty.index[b]);
-      double* drow = den_.row(ty.index[b]);
-      const double wy = w * ty.weight[b];
-      for (int a = 0; a < tx.count; ++a) {
-        const double ww = wy * tx.weight[a];
-        double* o = row + tx.index[a] * C;
-        for (int c = 0; c < C; ++c) o[c] += ww * v[c];
-        drow[tx.index[a]] += ww;
-      }
-    }
-  });
+  splat(s, target_, geometry(target_), s.values.data(), num_, &den_);
 }
 
 Coefficients ScatteredAcquisition::finish(ScatteredRule rule) const {
