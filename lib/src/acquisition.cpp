@@ -548,11 +548,32 @@ void Acquisition::Band::end() {
   const long b = band_;
   band_ = -1;
   whole_.ended_[b] = 1;
-  Grid<double>& acc = whole_.acc_;
-  whole_.slots_.ended(b, [&](long n, const double* slot) {
-    double* row = acc.row(n);
-    for (std::size_t q = 0; q < acc.row_size(); ++q) row[q] += slot[q];
+  whole_.slots_.ended(b, [&](long n, const double* slot) { whole_.merge_slot(n, slot); });
+}
+
+void Acquisition::merge_slot(long n, const double* slot) {
+  double* row = acc_.row(n);
+  for (std::size_t q = 0; q < acc_.row_size(); ++q) row[q] += slot[q];
+}
+
+BandPartial<double> Acquisition::partial(std::vector<long>* taken) const {
+  taken->clear();
+  for (long b = 0; b < long(ended_.size()); ++b)
+    if (ended_[b]) taken->push_back(b);
+  return slots_.partial(*taken, [&](long n, double* out) {
+    std::copy(acc_.row(n), acc_.row(n) + acc_.row_size(), out);
   });
+}
+
+void Acquisition::absorb(const BandPartial<double>& p, const std::vector<long>& taken) {
+  for (long b : taken)
+    if (b < 0 || b >= long(ended_.size()) || ended_[b])
+      throw std::invalid_argument("band " + std::to_string(b) + " out of range or already taken");
+  slots_.absorb(
+      p, taken,
+      [&](long n, const double* v) { std::copy(v, v + acc_.row_size(), acc_.row(n)); },
+      [&](long n, const double* slot) { merge_slot(n, slot); });
+  for (long b : taken) ended_[b] = 1;
 }
 
 namespace {

@@ -16,6 +16,7 @@
 
 #include "sis/memory.h"
 #include "sis/parallel.h"
+#include "sis/partial.h"
 #include "sis/projection.h"
 #include "sis/space.h"
 #include "space_sinks.h"
@@ -124,7 +125,7 @@ void check_memory(std::uint64_t needed, const std::string& what) {
                        " available; ask for a smaller output (--size or --factor)");
 }
 
-InputSet inspect(const std::vector<ProjectionInput>& inputs) {
+InputSet inspect(const std::vector<ProjectionInput>& inputs, bool partial) {
   if (inputs.empty()) throw RequestError("no input");
   InputSet set;
   struct Header {
@@ -169,8 +170,16 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs) {
   set.channel_names = first.names;
   set.alpha = first.alpha;
   set.coefficient_file = first.coefficients;
-  if (h.size() > 1) {
+  set.rows = first.height;
+  if (h.size() > 1 || partial) {
     long next = first.full_y;
+    if (partial) {
+      if (first.data_y < first.full_y || first.data_x != first.full_x || first.width != first.full_w)
+        throw InputError(first.path + ": not a row band of its display window (its data window "
+                         "must span the full width, within the display window)");
+      next = first.data_y;
+      set.first_row = first.data_y - first.full_y;
+    }
     for (const Header& b : h) {
       std::ostringstream m;
       m << b.path << ": not a row band of " << first.path << "'s image: ";
@@ -191,7 +200,7 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs) {
       }
       next = b.data_y + b.height;
     }
-    if (next != first.full_y + first.full_h) {
+    if (partial ? next > first.full_y + first.full_h : next != first.full_y + first.full_h) {
       std::ostringstream m;
       m << "the bands end at row " << next << " of a display window ending at row "
         << first.full_y + first.full_h;
@@ -199,6 +208,7 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs) {
     }
     set.width = first.full_w;
     set.height = first.full_h;
+    set.rows = next - first.full_y - set.first_row;
   } else if (first.input->image && first.full_h != first.height) {
     throw InputError(first.path + ": a band of " + std::to_string(first.height) + " rows from row " +
                      std::to_string(first.data_y) + " does not fill a grid of " +
@@ -271,12 +281,12 @@ Reading plan_reading(const InputSet& in, int threads, const BandPartition& bands
 
 // Reads the grid as planned, then the first non-finite sample of all bands
 // and their count.
-NonFiniteReport read_grid(const Reading& g, const BandPartition& bands, const BandCallbacks& cb,
-                          const std::vector<NonFiniteReport>& bad) {
+NonFiniteReport read_grid(const Reading& g, const BandPartition& bands, long first_band,
+                          const BandCallbacks& cb, const std::vector<NonFiniteReport>& bad) {
   std::vector<BandSource> sources;
   for (std::size_t f = 0; f < g.names.size(); ++f)
     sources.push_back({g.names[f], g.images[f], g.signatures[f]});
-  read_bands(sources, bands, g.strip, g.workers, g.half, cb);
+  read_bands(sources, bands, g.strip, g.workers, g.half, cb, first_band);
   NonFiniteReport all;
   for (const NonFiniteReport& n : bad) {
     if (n.count && all.count == 0) all = n;
@@ -299,6 +309,7 @@ NonFiniteReport acquire_in_bands(const InputSet& in, int threads, const SampleSt
                                  const std::function<void(double)>& progress,
                                  const std::function<void()>& interrupt) {
   const BandPartition& bands = sink.bands();
+  const long first_band = bands.of(in.first_row);
   const Reading g = plan_reading(in, threads, bands);
   StripFormat format;
   format.stages = &stages;
@@ -342,47 +353,92 @@ NonFiniteReport acquire_in_bands(const InputSet& in, int threads, const SampleSt
     w[t]->range->end();
     std::lock_guard<std::mutex> lock(progress_mutex);
     rows_done += bands.end(b) - bands.begin(b);
-    if (progress) progress(double(rows_done) / bands.rows());
+    if (progress) progress(double(rows_done) / std::max(1L, in.rows));
   };
-  return read_grid(g, bands, cb, bad);
+  return read_grid(g, bands, first_band, cb, bad);
 }
 
 }  // namespace
 
-Projection project(const ProjectionRequest& rq, InputSet inputs) {
-  Projection p;
-  p.inputs = std::move(inputs);
-  const InputSet& in = p.inputs;
-  if (in.coefficient_file)
-    throw RequestError(in.bands.front().path +
-                       " is a coefficient file: it is evaluated (load_coefficients), not projected");
-  const long W = rq.width, H = rq.height;
+namespace {
+
+SpaceRequest space_request(long input_width, long input_height, int channels, long W, long H,
+                           Method method, PrefilterMethod prefilter, Boundary boundary,
+                           int threads) {
+  SpaceRequest srq;
+  srq.input_width = input_width;
+  srq.input_height = input_height;
+  srq.channels = channels;
+  srq.width = W;
+  srq.height = H;
+  srq.method = method;
+  srq.prefilter = prefilter;
+  srq.boundary = boundary;
+  srq.threads = threads;
+  return srq;
+}
+
+// The frame's sides, the space's checks and the memory the projection
+// needs (RequestError before anything is read).
+std::uint64_t check_request(const Space& space, const SpaceRequest& srq, bool coefficient_file) {
+  const long W = srq.width, H = srq.height;
   if (W < 1 || H < 1 || W > kMaxOutputSide || H > kMaxOutputSide) {
     std::ostringstream m;
     m << "an output of " << W << " x " << H << " pixels: each side from 1 to " << kMaxOutputSide;
     throw RequestError(m.str());
   }
-  const int threads = std::max(1, rq.threads);
-  const int C = in.channels;
-  SpaceRequest srq;
-  srq.input_width = in.width;
-  srq.input_height = in.height;
-  srq.channels = C;
-  srq.width = W;
-  srq.height = H;
-  srq.method = rq.method;
-  srq.prefilter = rq.prefilter;
-  srq.boundary = rq.boundary;
-  srq.threads = threads;
-  const SpaceBudget budget = visit_space(rq.space, [&](const auto& space) {
-    space.check(srq);
-    return space.budget(srq);
+  const SpaceBudget budget = visit_space(space, [&](const auto& s) {
+    s.check(srq);
+    return s.budget(srq);
   });
-  p.estimated_bytes = projection_bytes(W, H, C, budget.coefficients, true, rq.coefficient_file,
-                                       threads, budget.tables);
-  check_memory(p.estimated_bytes, "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
-                                      std::to_string(C) + " output");
+  const std::uint64_t bytes = projection_bytes(W, H, srq.channels, budget.coefficients, true,
+                                               coefficient_file, srq.threads, budget.tables);
+  check_memory(bytes, "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
+                          std::to_string(srq.channels) + " output");
+  return bytes;
+}
 
+// The non-finite report's message, and the error it is unless replaced.
+void report_nonfinite(NonFiniteReport& bad, const std::vector<std::string>& names, bool stop) {
+  if (!bad.count) return;
+  std::ostringstream m;
+  m << bad.file << ": non-finite sample (NaN or Inf) at x " << bad.x << ", y " << bad.y
+    << ", channel "
+    << (bad.channel < int(names.size()) ? names[bad.channel] : std::to_string(bad.channel));
+  bad.where = m.str();
+  if (stop) throw InputError(bad.where + "; use --nonfinite zero to replace them with 0");
+}
+
+// The acquired sums to coefficients: prefiltered, kept in float where asked,
+// checked for overflow (project and merge).
+Coefficients finish_coefficients(Coefficients k, PrefilterMethod method, int threads,
+                                 bool float_coefficients, const std::string& label,
+                                 const std::vector<std::string>& names, double* seconds) {
+  const auto t2 = Clock::now();
+  prefilter(k, threads, method);
+  *seconds = seconds_since(t2);
+  // Coefficients are kept in float, as a coefficient file stores them, so
+  // that evaluating a written coefficient file reproduces this run exactly.
+  if (float_coefficients)
+    parallel_for(long(k.c.data.size()), threads, [&](long q0, long q1) {
+      for (long q = q0; q < q1; ++q) k.c.data[q] = static_cast<float>(k.c.data[q]);
+    });
+  // Finite samples near float's largest value can still overflow there.
+  const long overflow = first_nonfinite(k.c.data.data(), k.c.data.size());
+  if (overflow >= 0)
+    throw InputError(label + ": the samples are too large: the coefficients pass float's "
+                     "largest value (3.4e38) at coefficient " +
+                     value_position(overflow, k.c.width, names) + "; nothing written");
+  return k;
+}
+
+// Reads the inputs (all the grid's bands, or the whole bands a partial's
+// inputs hold) into the space's sink and a local range; then done(sink,
+// range, report) while the sink lives.
+template <typename Done>
+void acquire_inputs(const ProjectionRequest& rq, const InputSet& in, const SpaceRequest& srq,
+                    Projection& p, const Done& done) {
+  const int C = in.channels;
   const int alpha = in.alpha;
   auto for_colour = [C, alpha](float* data, std::size_t n, double (*f)(double), std::size_t k0) {
     for (std::size_t q = 0; q < n; ++q)
@@ -403,50 +459,212 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
     compress = [&](float* v, std::size_t n, std::size_t k0) { for_colour(v, n, highlight_compress, k0); };
   p.highlight_compressed = rq.highlight_compress;
   const bool stop = !rq.zero_nonfinite;
-  NonFiniteReport bad;
-  Coefficients k;
   const auto t = Clock::now();
   visit_space(rq.space, [&](const auto& space) {
     // The plan (the weights of every input row and column, some
     // milliseconds) is made while the first strips decode.
     const auto sink = space.sink(srq);
-    p.local_range = std::make_unique<LocalRange>(in.width, in.height, C, W, H, sink->bands().band_rows());
-    bad = acquire_in_bands(in, threads, stages, *sink, *p.local_range, stop, rq.progress,
-                           rq.interrupt);
-    if (!bad.count || !stop) k = sink->finish();
+    p.local_range = std::make_unique<LocalRange>(in.width, in.height, C, srq.width, srq.height,
+                                                 sink->bands().band_rows());
+    NonFiniteReport bad = acquire_in_bands(in, srq.threads, stages, *sink, *p.local_range, stop,
+                                           rq.progress, rq.interrupt);
+    p.acquire_seconds = seconds_since(t);
+    for (auto& r : p.inputs.readers) r->release();  // the decoders' buffers, before the later stages
+    report_nonfinite(bad, in.channel_names, stop);
+    p.nonfinite = bad;
+    done(*sink);
   });
-  p.acquire_seconds = seconds_since(t);
-  for (auto& r : p.inputs.readers) r->release();  // the decoders' buffers, before the later stages
-  if (bad.count) {
-    std::ostringstream m;
-    m << bad.file << ": non-finite sample (NaN or Inf) at x " << bad.x << ", y " << bad.y
-      << ", channel "
-      << (bad.channel < int(in.channel_names.size()) ? in.channel_names[bad.channel]
-                                                     : std::to_string(bad.channel));
-    bad.where = m.str();
-    if (stop) throw InputError(bad.where + "; use --nonfinite zero to replace them with 0");
-  }
-  p.nonfinite = bad;
-  const auto t2 = Clock::now();
-  prefilter(k, threads, rq.prefilter);
-  p.prefilter_seconds = seconds_since(t2);
-  // Coefficients are kept in float, as a coefficient file stores them, so
-  // that evaluating a written coefficient file reproduces this run exactly.
-  if (rq.float_coefficients)
-    parallel_for(long(k.c.data.size()), threads, [&](long q0, long q1) {
-      for (long q = q0; q < q1; ++q) k.c.data[q] = static_cast<float>(k.c.data[q]);
-    });
-  // Finite samples near float's largest value can still overflow there.
-  const long overflow = first_nonfinite(k.c.data.data(), k.c.data.size());
-  if (overflow >= 0)
-    throw InputError(in.label + ": the samples are too large: the coefficients pass float's "
-                     "largest value (3.4e38) at coefficient " +
-                     value_position(overflow, k.c.width, in.channel_names) + "; nothing written");
-  p.coefficients = std::move(k);
+}
+
+}  // namespace
+
+Projection project(const ProjectionRequest& rq, InputSet inputs) {
+  Projection p;
+  p.inputs = std::move(inputs);
+  const InputSet& in = p.inputs;
+  if (in.coefficient_file)
+    throw RequestError(in.bands.front().path +
+                       " is a coefficient file: it is evaluated (load_coefficients), not projected");
+  const int threads = std::max(1, rq.threads);
+  const SpaceRequest srq = space_request(in.width, in.height, in.channels, rq.width, rq.height,
+                                         rq.method, rq.prefilter, rq.boundary, threads);
+  p.estimated_bytes = check_request(rq.space, srq, rq.coefficient_file);
+  Coefficients k;
+  acquire_inputs(rq, in, srq, p, [&](auto& sink) { k = sink.finish(); });
+  p.coefficients = finish_coefficients(std::move(k), rq.prefilter, threads, rq.float_coefficients,
+                                       in.label, in.channel_names, &p.prefilter_seconds);
   return p;
 }
 
 Projection project(const ProjectionRequest& rq) { return project(rq, inspect(rq.inputs)); }
+
+std::vector<long> band_cuts(long rows, long parts, long band_rows) {
+  const BandPartition bands(rows, band_rows);
+  if (rows < 1 || parts < 1 || parts > bands.count()) {
+    std::ostringstream m;
+    m << rows << " rows in " << parts << " parts of whole bands of " << bands.band_rows()
+      << " rows: from 1 to " << bands.count() << " parts";
+    throw RequestError(m.str());
+  }
+  std::vector<long> cuts;
+  for (long t = 0; t < parts; ++t) cuts.push_back(bands.begin(t * bands.count() / parts));
+  cuts.push_back(rows);
+  return cuts;
+}
+
+Partial project_partial(const ProjectionRequest& rq) {
+  return project_partial(rq, inspect(rq.inputs, true));
+}
+
+Partial project_partial(const ProjectionRequest& rq, InputSet inputs) {
+  Projection p;
+  p.inputs = std::move(inputs);
+  const InputSet& in = p.inputs;
+  if (in.coefficient_file)
+    throw RequestError(in.bands.front().path + " is a coefficient file: it has no partial");
+  const int threads = std::max(1, rq.threads);
+  const SpaceRequest srq = space_request(in.width, in.height, in.channels, rq.width, rq.height,
+                                         rq.method, rq.prefilter, rq.boundary, threads);
+  p.estimated_bytes = check_request(rq.space, srq, false);
+  // whole bands of the sinks' partition (kBandRows), checked before reading
+  const long y0 = in.first_row, y1 = in.first_row + in.rows;
+  if (y0 % kBandRows != 0 || (y1 != in.height && y1 % kBandRows != 0)) {
+    std::ostringstream m;
+    m << in.label << ": rows " << y0 << " to " << y1 - 1 << " of " << in.height
+      << " are not whole bands of " << kBandRows << " rows; a partial's rows start at a multiple of "
+      << kBandRows << " and end at one or at the grid's end (siproject --band-cuts)";
+    throw RequestError(m.str());
+  }
+  Partial out;
+  out.space = rq.space;
+  acquire_inputs(rq, in, srq, p, [&](auto& sink) {
+    const BandPartition& bands = sink.bands();
+    if (bands.band_rows() != std::min(kBandRows, std::max(1L, in.height)))
+      throw std::logic_error("project_partial(): a sink's bands are not of kBandRows");
+    out.band_rows = bands.band_rows();
+    out.band_count = bands.count();
+    out.acquisition = sink.partial(&out.bands);
+  });
+  std::vector<long> range_bands;
+  out.range = p.local_range->partial(&range_bands);
+  if (range_bands != out.bands) throw std::logic_error("project_partial(): the range's bands differ");
+  out.input_width = in.width;
+  out.input_height = in.height;
+  out.width = rq.width;
+  out.height = rq.height;
+  out.channel_names = in.channel_names;
+  out.alpha = in.alpha;
+  out.method = rq.method;
+  out.boundary = rq.boundary;
+  out.prefilter = rq.prefilter;
+  out.transfer = p.transfer;
+  out.highlight_compressed = p.highlight_compressed;
+  out.zero_nonfinite = rq.zero_nonfinite;
+  out.integer_bits = in.integer_bits;
+  out.half = in.half;
+  out.label = in.label;
+  out.nonfinite = p.nonfinite;
+  return out;
+}
+
+namespace {
+std::string band_span(const std::vector<long>& bands) {
+  if (bands.empty()) return "no bands";
+  return bands.size() == 1 ? "band " + std::to_string(bands.front())
+                           : "bands " + std::to_string(bands.front()) + " to " +
+                                 std::to_string(bands.back());
+}
+}  // namespace
+
+Projection merge(const std::vector<Partial>& parts, int threads, bool float_coefficients) {
+  if (parts.empty()) throw RequestError("merge: no partial");
+  threads = std::max(1, threads);
+  const Partial& first = parts.front();
+  const Metadata key = partial_request(first);
+  std::vector<long> owner(std::size_t(std::max(0L, first.band_count)), -1);
+  for (std::size_t q = 0; q < parts.size(); ++q) {
+    const Partial& part = parts[q];
+    const Metadata other = partial_request(part);
+    for (std::size_t k = 0; k < key.size(); ++k)
+      if (k >= other.size() || other[k] != key[k])
+        throw RequestError(part.label + ": a partial of another request than " + first.label +
+                           "'s (" + key[k].first + " " +
+                           (k < other.size() ? other[k].second : "missing") + ", not " +
+                           key[k].second + "); partials merge only with the same input size, "
+                           "output size and options");
+    for (long b : part.bands) {
+      if (b < 0 || b >= first.band_count)
+        throw RequestError(part.label + ": band " + std::to_string(b) + " out of range");
+      if (owner[b] >= 0)
+        throw RequestError(part.label + " and " + parts[owner[b]].label + " both hold band " +
+                           std::to_string(b) + " (rows from " + std::to_string(b * first.band_rows) +
+                           "): partials that overlap");
+      owner[b] = long(q);
+    }
+  }
+  for (long b = 0; b < first.band_count; ++b)
+    if (owner[b] < 0) {
+      std::ostringstream m;
+      m << "merge: no partial holds band " << b << " (rows " << b * first.band_rows << " to "
+        << std::min(first.input_height, (b + 1) * first.band_rows) - 1 << " of "
+        << first.input_height << "): a gap";
+      throw RequestError(m.str());
+    }
+  const SpaceRequest srq =
+      space_request(first.input_width, first.input_height, int(first.channel_names.size()),
+                    first.width, first.height, first.method, first.prefilter, first.boundary,
+                    threads);
+  Projection p;
+  p.estimated_bytes = check_request(first.space, srq, false);
+  InputSet& in = p.inputs;
+  in.width = first.input_width;
+  in.height = first.input_height;
+  in.rows = first.input_height;
+  in.channels = srq.channels;
+  in.channel_names = first.channel_names;
+  in.alpha = first.alpha;
+  in.half = std::all_of(parts.begin(), parts.end(), [](const Partial& q) { return q.half; });
+  in.transfer = first.transfer;
+  in.srgb = first.transfer.kind == Transfer::SRGB;
+  in.integer_bits = first.integer_bits;
+  for (const Partial& q : parts) in.integer_bits = q.integer_bits ? std::max(in.integer_bits, q.integer_bits) : 0;
+  in.label = first.label + (parts.size() > 1 ? " and " + std::to_string(parts.size() - 1) + " more partials" : "");
+  p.transfer = first.transfer;
+  p.highlight_compressed = first.highlight_compressed;
+  // the non-finite report: the first in band order, the count of all
+  long nonfinite = 0;
+  for (long b = 0; b < first.band_count; ++b) {
+    const Partial& q = parts[owner[b]];
+    if (q.bands.front() != b) continue;  // each partial once, at its first band
+    if (q.nonfinite.count && nonfinite == 0) p.nonfinite = q.nonfinite;
+    nonfinite += q.nonfinite.count;
+  }
+  p.nonfinite.count = nonfinite;
+  const auto t = Clock::now();
+  Coefficients k;
+  visit_space(first.space, [&](const auto& space) {
+    const auto sink = space.sink(srq);
+    if (sink->bands().band_rows() != first.band_rows || sink->bands().count() != first.band_count)
+      throw RequestError(first.label + ": partial of bands of " + std::to_string(first.band_rows) +
+                         " rows, not this build's " + std::to_string(sink->bands().band_rows()));
+    p.local_range = std::make_unique<LocalRange>(in.width, in.height, in.channels, srq.width,
+                                                 srq.height, first.band_rows);
+    for (const Partial& q : parts) {
+      try {
+        sink->absorb(q.acquisition, q.bands);
+        p.local_range->absorb(q.range, q.bands);
+      } catch (const std::invalid_argument& e) {
+        throw InputError(q.label + ": not a whole partial of " + band_span(q.bands) + " (" +
+                         e.what() + ")");
+      }
+    }
+    k = sink->finish();
+  });
+  p.acquire_seconds = seconds_since(t);
+  p.coefficients = finish_coefficients(std::move(k), first.prefilter, threads, float_coefficients,
+                                       in.label, in.channel_names, &p.prefilter_seconds);
+  return p;
+}
 
 Coefficients load_coefficients(const std::string& path, bool zero_nonfinite,
                                NonFiniteReport* replaced, const FileSignature& expected) {

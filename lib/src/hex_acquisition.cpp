@@ -402,6 +402,31 @@ void HexAcquisition::Band::end() {
   });
 }
 
+BandPartial<double> HexAcquisition::partial(std::vector<long>* taken) const {
+  taken->clear();
+  for (long b = 0; b < long(ended_.size()); ++b) {
+    if (ended_[b] == 1) throw std::logic_error("HexAcquisition::partial(): a band in progress");
+    if (ended_[b] == 2) taken->push_back(b);
+  }
+  return slots_.partial(*taken, [&](long j, double* out) {
+    std::copy(acc_.row(j), acc_.row(j) + acc_.row_size(), out);
+  });
+}
+
+void HexAcquisition::absorb(const BandPartial<double>& p, const std::vector<long>& taken) {
+  for (long b : taken)
+    if (b < 0 || b >= long(ended_.size()) || ended_[b] != 0)
+      throw std::invalid_argument("band " + std::to_string(b) + " out of range or already taken");
+  slots_.absorb(
+      p, taken,
+      [&](long j, const double* v) { std::copy(v, v + acc_.row_size(), acc_.row(j)); },
+      [&](long j, const double* slot) {
+        double* row = acc_.row(j);
+        for (std::size_t q = 0; q < acc_.row_size(); ++q) row[q] += slot[q];
+      });
+  for (long b : taken) ended_[b] = 2;
+}
+
 Coefficients HexAcquisition::finish() {
   const long ended =
       std::count_if(ended_.begin(), ended_.end(), [](const std::atomic<char>& e) { return e == 2; });

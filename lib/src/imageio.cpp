@@ -678,11 +678,14 @@ long read_bands(const std::vector<std::string>& paths, const BandPartition& band
 }
 
 long read_bands(const std::vector<BandSource>& sources, const BandPartition& bands, long strip,
-                int workers, bool half, const BandCallbacks& cb) {
+                int workers, bool half, const BandCallbacks& cb, long first_band) {
   if (strip < 1) throw std::invalid_argument("read_bands(): strip < 1");
+  if (first_band < 0 || (first_band > 0 && first_band >= bands.count()))
+    throw std::invalid_argument("read_bands(): first band out of range");
+  const long base = bands.count() > 0 ? bands.begin(first_band) : 0;  // the sources' first row
   std::vector<std::string> paths;  // the names strips carry
   for (const BandSource& s : sources) paths.push_back(s.name);
-  const int T = int(std::clamp<long>(workers, 1, std::max(1L, bands.count())));
+  const int T = int(std::clamp<long>(workers, 1, std::max(1L, bands.count() - first_band)));
   std::optional<ExrThreadsOff> off;  // for the readers opened here and by the threads
   if (T > 1) off.emplace();
   std::vector<long> start(1, 0);  // each file's first row in the image
@@ -714,12 +717,17 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
       throw std::logic_error(r.path() + ": read_bands() with half on samples not stored as half");
     start.push_back(start.back() + r.height());
     values = std::max(values, std::size_t(std::min(strip, r.height())) * r.width() * r.channels());
-    if (bands.count() > 0 && start[f] < bands.end(0)) first_readers[f] = std::move(opened);
+    if (bands.count() > 0 && base + start[f] < bands.end(first_band))
+      first_readers[f] = std::move(opened);
   }
-  if (start.back() != bands.rows())
+  // the bands the sources cover
+  const long last_band = bands.count() > 0 ? bands.of(std::max(base, base + start.back() - 1)) + 1 : 0;
+  if (base + start.back() != (bands.count() > 0 ? bands.end(last_band - 1) : 0) &&
+      !(start.back() == 0 && bands.rows() == 0))
     throw std::logic_error("read_bands(): the files hold " + std::to_string(start.back()) +
-                           " rows, the bands " + std::to_string(bands.rows()));
-  std::atomic<long> next{0};
+                           " rows from row " + std::to_string(base) + ", not whole bands of " +
+                           std::to_string(bands.rows()));
+  std::atomic<long> next{first_band};
   std::atomic<long> stop{LONG_MAX};  // the first band stopped so far
   auto stop_at = [&](long b) {
     long s = stop.load();
@@ -744,16 +752,16 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
     Buffer<float> float_rows(half ? 0 : values);
     for (;;) {
       const long b = next++;
-      if (b >= bands.count() || b > stop.load()) return;
+      if (b >= last_band || b > stop.load()) return;
       try {
         cb.begin(t, b);
         bool whole = true;
-        for (long y = bands.begin(b); y < bands.end(b);) {
+        for (long y = bands.begin(b) - base; y < bands.end(b) - base;) {  // the sources' rows
           if (b > stop.load()) return;  // an earlier band stopped
           const std::size_t f = std::upper_bound(start.begin(), start.end(), y) - start.begin() - 1;
           const long y0 = y - start[f];
           // to the end of the file's strip, the band or the file
-          const long y1 = std::min({(y0 / strip + 1) * strip, bands.end(b) - start[f],
+          const long y1 = std::min({(y0 / strip + 1) * strip, bands.end(b) - base - start[f],
                                     start[f + 1] - start[f]});
           if (const SampleView& im = sources[f].image) {  // copied: the callbacks write in place
             const std::size_t n = std::size_t(y1 - y0) * im.row_size();
@@ -771,7 +779,7 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
             reader(f).read_rows_half(y0, y1, half_rows.data());
           else
             reader(f).read_rows(y0, y1, float_rows.data());
-          if (!cb.strip(t, Strip{f, &paths[f], y0, y1, y, half ? half_rows.data() : nullptr,
+          if (!cb.strip(t, Strip{f, &paths[f], y0, y1, base + y, half ? half_rows.data() : nullptr,
                                  half ? nullptr : float_rows.data()})) {
             whole = false;
             break;

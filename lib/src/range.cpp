@@ -81,6 +81,7 @@ LocalRange::LocalRange(long input_width, long input_height, int channels, long w
   for (long o = 0; o < height; ++o)
     for (long b = bands_.of(y_begin_[o]); b <= bands_.of(y_end_[o] - 1); ++b) row_bands[o].push_back(b);
   slots_ = BandSlots<float>(row_bands, bands_.count(), 2 * std::size_t(width) * channels);
+  ended_.assign(bands_.count(), 0);
   // unset: the bands write every pixel of an output row, so no serial fill
   // first touches these pages
   min_ = Image(width, height, channels, kUnset);
@@ -272,15 +273,44 @@ void LocalRange::Band::end() {
                            " not begun or not complete");
   const long b = band_;
   band_ = -1;
-  const std::size_t n = w.min_.row_size();
-  w.slots_.ended(b, [&](long o, const float* slot) {
-    float* lo = w.min_.row(o);
-    float* hi = w.max_.row(o);
-    for (std::size_t q = 0; q < n; ++q) {
-      lo[q] = slot[q] < lo[q] ? slot[q] : lo[q];
-      hi[q] = slot[n + q] > hi[q] ? slot[n + q] : hi[q];
-    }
+  w.ended_[b] = 1;
+  w.slots_.ended(b, [&](long o, const float* slot) { w.merge_slot(o, slot); });
+}
+
+void LocalRange::merge_slot(long o, const float* slot) {
+  const std::size_t n = min_.row_size();
+  float* lo = min_.row(o);
+  float* hi = max_.row(o);
+  for (std::size_t q = 0; q < n; ++q) {
+    lo[q] = slot[q] < lo[q] ? slot[q] : lo[q];
+    hi[q] = slot[n + q] > hi[q] ? slot[n + q] : hi[q];
+  }
+}
+
+BandPartial<float> LocalRange::partial(std::vector<long>* taken) const {
+  taken->clear();
+  for (long b = 0; b < long(ended_.size()); ++b)
+    if (ended_[b]) taken->push_back(b);
+  const std::size_t n = min_.row_size();
+  return slots_.partial(*taken, [&](long o, float* out) {
+    std::copy(min_.row(o), min_.row(o) + n, out);
+    std::copy(max_.row(o), max_.row(o) + n, out + n);
   });
+}
+
+void LocalRange::absorb(const BandPartial<float>& p, const std::vector<long>& taken) {
+  for (long b : taken)
+    if (b < 0 || b >= long(ended_.size()) || ended_[b])
+      throw std::invalid_argument("band " + std::to_string(b) + " out of range or already taken");
+  const std::size_t n = min_.row_size();
+  slots_.absorb(
+      p, taken,
+      [&](long o, const float* v) {
+        std::copy(v, v + n, min_.row(o));
+        std::copy(v + n, v + 2 * n, max_.row(o));
+      },
+      [&](long o, const float* slot) { merge_slot(o, slot); });
+  for (long b : taken) ended_[b] = 1;
 }
 
 void LocalRange::open(long y0, long y1) {

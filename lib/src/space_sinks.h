@@ -126,6 +126,8 @@ class CartesianSink {
     Acquisition::Band band_;
   };
   Coefficients finish() { return whole_.finish(); }
+  BandPartial<double> partial(std::vector<long>* taken) const { return whole_.partial(taken); }
+  void absorb(const BandPartial<double>& p, const std::vector<long>& taken) { whole_.absorb(p, taken); }
 
  private:
   AcquisitionPlan plan_;
@@ -156,6 +158,8 @@ class HexagonalSink {
     Buffer<float> converted_;  // a half strip as float
   };
   Coefficients finish() { return whole_.finish(); }
+  BandPartial<double> partial(std::vector<long>* taken) const { return whole_.partial(taken); }
+  void absorb(const BandPartial<double>& p, const std::vector<long>& taken) { whole_.absorb(p, taken); }
 
  private:
   HexAcquisitionPlan plan_;

@@ -145,10 +145,20 @@ class Acquisition {
   };
 
   // The acquired coefficients r[n] (min-error) or pixels p[n] (conventional),
-  // once every row is added (or every band ended).
+  // once every row is added (or every band ended, or absorbed).
   Coefficients finish();
 
+  // The sums of the bands ended so far (sis/bands.h), none in progress;
+  // *taken: those bands, ascending.
+  BandPartial<double> partial(std::vector<long>* taken) const;
+  // Takes in the partial of bands `taken` from an Acquisition of the same
+  // plan, as if those bands had ended here. Throws std::invalid_argument
+  // when a band is out of range or already here, or the partial is not of
+  // those bands.
+  void absorb(const BandPartial<double>& p, const std::vector<long>& taken);
+
  private:
+  void merge_slot(long n, const double* slot);
   template <typename T, typename Piece>
   void add_in_order(long y0, long y1, const Piece& piece);
   const AcquisitionPlan& plan_;

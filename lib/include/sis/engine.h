@@ -62,6 +62,7 @@ struct ProjectionInput {
 // What the inputs hold, checked as one image (every band of one grid).
 struct InputSet {
   long width = 0, height = 0;  // the sample grid
+  long first_row = 0, rows = 0;  // the grid's rows the inputs hold (a partial's: some; else all)
   int channels = 0;
   std::vector<std::string> channel_names;
   int alpha = -1;
@@ -79,8 +80,10 @@ struct InputSet {
   std::vector<std::shared_ptr<ImageReader>> readers;
 };
 // Reads the inputs' headers (each file closed again unless few) and checks
-// that they tile one grid. Throws InputError naming the file.
-InputSet inspect(const std::vector<ProjectionInput>& inputs);
+// that they tile one grid (some of its rows, one run of them, where
+// `partial`: the grid is then a file's display window, or an in-memory
+// band's `rows`). Throws InputError naming the file.
+InputSet inspect(const std::vector<ProjectionInput>& inputs, bool partial = false);
 
 struct ProjectionRequest {
   std::vector<ProjectionInput> inputs;

@@ -162,6 +162,10 @@ class HexAcquisition {
 
   // The acquired r[n] (sis/hex_lattice.h says how Coefficients records them).
   Coefficients finish();
+  // As Acquisition's (sis/acquisition.h): the sums of the ended bands, and
+  // the partial of another HexAcquisition of the same plan taken in.
+  BandPartial<double> partial(std::vector<long>* taken) const;
+  void absorb(const BandPartial<double>& p, const std::vector<long>& taken);
 
  private:
   const HexAcquisitionPlan& plan_;

@@ -220,8 +220,10 @@ struct BandSource {
   // in any case.
   FileSignature expected = {};
 };
+// The sources hold rows from bands.begin(first_band) to the end of a band
+// (those bands are read; by default all of them).
 long read_bands(const std::vector<BandSource>& sources, const BandPartition& bands, long strip,
-                int workers, bool half, const BandCallbacks& callbacks);
+                int workers, bool half, const BandCallbacks& callbacks, long first_band = 0);
 
 // Decodes n interleaved samples of `channels` channels to linear light by
 // `t` (the first at channel k0 % channels), the alpha channel (-1: none)

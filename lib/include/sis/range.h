@@ -92,7 +92,15 @@ class LocalRange {
   const Image& min() const { return min_; }
   const Image& max() const { return max_; }
 
+  // As Acquisition's (sis/acquisition.h): the ranges of the ended bands
+  // (each row's min then max), and the partial of another LocalRange of
+  // the same sizes taken in.
+  BandPartial<float> partial(std::vector<long>* taken) const;
+  void absorb(const BandPartial<float>& p, const std::vector<long>& taken);
+
  private:
+  void merge_slot(long o, const float* slot);
+  std::vector<char> ended_;  // per band
   std::vector<long> x_begin_, x_end_, y_begin_, y_end_;  // sample index ranges per pixel
   long win_, hin_, width_, height_;
   int channels_;
