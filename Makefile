@@ -95,7 +95,7 @@ ifeq ($(TILES),1)
 endif
 .DELETE_ON_ERROR:
 
-.PHONY: all scene all-scenes setup build test install docs clean FORCE
+.PHONY: all scene all-scenes setup build test install docs clean band-cuts FORCE
 .DEFAULT_GOAL := all
 
 all: scene
@@ -122,6 +122,10 @@ install: build
 
 clean:
 	rm -rf $(BUILD) $(OUT)
+
+# The first render row of each of the TILES bands, then the render's height.
+band-cuts:
+	@echo $(foreach i,$(band_indices) $(TILES),$(call band_y0,$(i)))
 
 ifeq ($(PREBUILT),)
 $(SIPROJECT): build ;
@@ -173,10 +177,19 @@ endef
 render_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR).exr
 render_stamp_of = $(OUT)/render/.$(1)-$(RES_TAG)-f$(FACTOR).cmd
 render_opts_of = $(strip $(POVOPTS_$(1)) $(POVOPTS))
-# Row bands: band I of TILES covers render rows [I H / TILES, (I + 1) H / TILES).
+# Row bands: band I of TILES starts at the row `siproject --band-cuts H,TILES`
+# prints, a whole number of the engine's bands of BAND_ROWS rows (sis/bands.h,
+# kBandRows), so that each band's partial (siproject --partial) merges to the
+# single render's bits; a render of fewer such bands than TILES is cut
+# evenly, [I H / TILES, (I + 1) H / TILES) (read as one image with --bands).
+BAND_ROWS := 256
 band_indices := $(shell seq 0 $$(( $(TILES) - 1 )))
 band_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)-band$(2)of$(TILES).exr
-band_y0 = $(shell echo $$(( ( $(1) ) * $(RENDER_H) / $(TILES) )))
+engine_bands := $(shell echo $$(( ( $(RENDER_H) + $(BAND_ROWS) - 1 ) / $(BAND_ROWS) )))
+band_y0 = $(shell i=$$(( $(1) )); \
+  if [ $$i -ge $(TILES) ]; then echo $(RENDER_H); \
+  elif [ $(engine_bands) -ge $(TILES) ]; then echo $$(( $(BAND_ROWS) * ( i * $(engine_bands) / $(TILES) ) )); \
+  else echo $$(( i * $(RENDER_H) / $(TILES) )); fi)
 inputs_of = $(if $(filter 1,$(TILES)),$(call render_of,$(1)),$(foreach i,$(band_indices),$(call band_of,$(1),$(i))))
 method_cmd_of = $(strip $(SIPROJECT) $(call inputs_of,$(1)) $(if $(filter 1,$(TILES)),,--bands) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(SIFLAGS))
 summary_of = $(OUT)/$(1)/summary.txt

@@ -23,6 +23,7 @@
 #include "sis/engine.h"
 #include "sis/hex_lattice.h"
 #include "sis/memory.h"
+#include "sis/partial.h"
 #include "sis/projection.h"
 #include "sis/sequence.h"
 #include "sis/settings.h"
@@ -57,6 +58,10 @@ struct Options {
   std::string frames;
   int framepadding = 0;
   bool bands = false;
+  // --partial: write the partial of the bands the inputs hold (to -o);
+  // --merge: the inputs are partial files, added into one projection.
+  bool partial = false, merge = false;
+  bool display_given = false, clamp_given = false;
 };
 
 using Clock = std::chrono::steady_clock;
@@ -106,6 +111,31 @@ bool same_file(const std::string& a, const std::string& b) {
   return !ec1 && !ec2 && pa == pb;
 }
 
+
+// siproject --partial: the partial of the bands the inputs hold, to -o.
+int write_partial_of(const Options& o, const Resolved& r, InputSet set) {
+  if (!o.coeffs.empty() || !o.data_format.empty() || !o.compression.empty() || o.quality ||
+      o.display_given || o.clamp_given)
+    throw UsageError("--partial writes the acquisition of some bands, not an image: --coeffs, -d, "
+                     "--compression, --quality, --display and --clamp apply where the partials "
+                     "merge (siproject --merge)");
+  if (!holds_coefficients(o.output))
+    throw UsageError("-o " + o.output + ": partial files are OpenEXR (.exr)");
+  const auto t = Clock::now();
+  FormRequest fr;
+  Progress progress(!o.quiet, "reading and acquiring");
+  fr.progress = [&](double f) { progress.update(f); };
+  const Partial p = form_partial(o.settings, r, std::move(set), fr);
+  if (p.nonfinite.count && !o.quiet)
+    std::cerr << "siproject: warning: replaced " << p.nonfinite.count
+              << " non-finite samples with 0; first: " << p.nonfinite.where << "\n";
+  write_partial(o.output, p);
+  if (o.verbose)
+    std::fprintf(stderr, "siproject: partial of bands %ld to %ld of %ld (rows of %ld) -> %s, %.3f s\n",
+                 p.bands.front(), p.bands.back(), p.band_count, p.band_rows, o.output.c_str(),
+                 seconds_since(t));
+  return 0;
+}
 
 int run(const Options& o) {
   const auto t_start = Clock::now();
@@ -161,7 +191,10 @@ int run(const Options& o) {
   // window spans the full width and the bands tile the display window's rows.
   std::vector<ProjectionInput> inputs;
   for (const std::string& in : o.inputs) inputs.push_back(ProjectionInput::file(in));
-  InputSet set = inspect(inputs);
+  InputSet set = inspect(inputs, o.partial);
+  if (o.partial) return write_partial_of(o, r, std::move(set));
+  if (o.merge && !set.partial_files)
+    throw UsageError("--merge: " + set.label + " is not a partial file (siproject --partial)");
   for (const auto& r : set.readers) {
     if (r->parts() > 1 && !o.quiet)
       std::fprintf(stderr, "siproject: warning: %s has %d parts; its first is projected\n",
@@ -431,9 +464,12 @@ std::vector<Job> plan_jobs(const Options& o) {
   const std::vector<Frame> frames = expand_inputs(o);
   const Target out = target_of(o.output, "-o", o.framepadding);
   const Target coeffs = target_of(o.coeffs, "--coeffs", o.framepadding);
-  if (o.bands) {
+  if (o.bands && o.merge) throw UsageError("--bands and --merge exclude each other");
+  if (o.partial && o.merge) throw UsageError("--partial and --merge exclude each other");
+  if (o.bands || o.merge) {
     if (out.kind != Target::File || coeffs.kind != Target::File)
-      throw UsageError("--bands makes one image of its inputs: -o and --coeffs name files");
+      throw UsageError(std::string(o.bands ? "--bands" : "--merge") +
+                       " makes one image of its inputs: -o and --coeffs name files");
     Job j{{}, o.output, o.coeffs};
     for (const Frame& f : frames) j.inputs.push_back(f.path);
     return {j};
@@ -529,6 +565,40 @@ int main(int argc, char** argv) try {
   app.add_flag("--bands", o.bands,
                "the inputs are row bands of one image, projected as one (placed by their data "
                "windows, e.g. partial renders cropped with oiiotool --crop)");
+  app.add_flag("--partial", o.partial,
+               "write to -o (.exr) the partial acquisition of the row bands the inputs hold (a "
+               "band render's rows, cut at siproject --band-cuts), for --merge; the other "
+               "options as the single run's");
+  app.add_flag("--merge", o.merge,
+               "the inputs are partial files (--partial) of one image: added, in any order, into "
+               "the single run's projection and its final image");
+  app.add_option_function<std::string>(
+      "--band-cuts",
+      [](const std::string& v) {
+        // ROWS,PARTS: printed as the parts' first rows and ROWS, then done
+        const auto comma = v.find(',');
+        long rows = 0, parts = 0;
+        std::size_t used_rows = 0, used_parts = 0;
+        try {
+          rows = std::stol(v.substr(0, comma), &used_rows);
+          parts = std::stol(v.substr(comma + 1), &used_parts);
+        } catch (const std::exception&) {
+          used_rows = 0;
+        }
+        if (comma == std::string::npos || used_rows != comma || used_parts != v.size() - comma - 1)
+          throw CLI::ValidationError("--band-cuts", "'" + v + "': expected ROWS,PARTS (whole numbers)");
+        std::vector<long> cuts;
+        try {
+          cuts = band_cuts(rows, parts);
+        } catch (const RequestError& e) {
+          throw CLI::ValidationError("--band-cuts", e.what());
+        }
+        for (std::size_t k = 0; k < cuts.size(); ++k) std::cout << (k ? " " : "") << cuts[k];
+        std::cout << "\n";
+        throw CLI::Success();
+      },
+      "ROWS,PARTS: print where to cut a grid of ROWS rows into PARTS runs of whole bands "
+      "(the rows --partial inputs start at, then ROWS), and exit");
   double factor = 0;
   auto* fac = app.add_option("--factor", factor,
                              "supersampling factor per axis: output = input / S (any real S > 0; "
@@ -607,6 +677,8 @@ int main(int argc, char** argv) try {
   app.set_version_flag("--version", std::string("siproject ") + SIS_VERSION + " (git " + SIS_GIT_REVISION + ")",
                        "print the version and the git revision built");
   if (const auto code = sis::cli::parse(app, argc, argv)) return *code;
+  o.display_given = app.count("--display") > 0;
+  o.clamp_given = app.count("--clamp") > 0;
   remove_staged_files_on_signals();
   Settings& st = o.settings;
   st.generator_given = g->count() > 0;

@@ -140,6 +140,29 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs, bool partial) {
     std::string path;
   };
   std::vector<Header> h;
+  // Partial files are merged whole: none is a band of an image.
+  if (!inputs.front().image && is_partial_file(ImageReader(inputs.front().path))) {
+    for (const ProjectionInput& in : inputs)
+      if (in.image || !is_partial_file(ImageReader(in.path)))
+        throw RequestError((in.image ? in.name : in.path) + ": not a partial file; partial files (" +
+                           inputs.front().path + ") merge only with partial files");
+    set.partial_files = true;
+    // the inputs as the partials record them (the first's; merge() checks the rest)
+    const Partial head = read_partial(inputs.front().path, false);
+    set.width = head.input_width;
+    set.height = set.rows = head.input_height;
+    set.channels = int(head.channel_names.size());
+    set.channel_names = head.channel_names;
+    set.alpha = head.alpha;
+    set.half = head.half;
+    set.transfer = head.transfer;
+    set.srgb = head.transfer.kind == Transfer::SRGB;
+    set.integer_bits = head.integer_bits;
+    for (const ProjectionInput& in : inputs) set.bands.push_back(in);
+    set.label = fs::path(inputs.front().path).filename().string() +
+                (inputs.size() > 1 ? " and " + std::to_string(inputs.size() - 1) + " more partials" : "");
+    return set;
+  }
   for (const ProjectionInput& in : inputs) {
     if (in.image) {
       const SampleView& im = in.image;
@@ -155,6 +178,9 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs, bool partial) {
     }
     auto reader = std::make_shared<ImageReader>(in.path);
     const ImageReader& r = *reader;
+    if (is_partial_file(r))
+      throw RequestError(in.path + ": a partial file merges only with partial files, not with " +
+                         (inputs.front().image ? inputs.front().name : inputs.front().path));
     h.push_back({&in, r.width(), r.height(), r.full_x(), r.full_y(), r.full_width(),
                  r.full_height(), r.data_x(), r.data_y(), r.channels(), r.alpha_channel(),
                  r.channel_names(), r.stores_half(), r.transfer(), r.integer_bits(), is_coefficient_file(r),
@@ -607,7 +633,7 @@ Projection merge(const std::vector<Partial>& parts, int threads, bool float_coef
       std::ostringstream m;
       m << "merge: no partial holds band " << b << " (rows " << b * first.band_rows << " to "
         << std::min(first.input_height, (b + 1) * first.band_rows) - 1 << " of "
-        << first.input_height << "): a gap";
+        << first.input_height << "): a gap; a merge takes the partials of every band";
       throw RequestError(m.str());
     }
   const SpaceRequest srq =

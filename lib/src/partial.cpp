@@ -198,7 +198,7 @@ void write_partial(const std::string& path, const Partial& p) {
   file.commit();
 }
 
-Partial read_partial(const std::string& path) {
+Partial read_partial(const std::string& path, bool values) {
   ImageReader reader(path);
   if (!is_partial_file(reader)) throw InputError(path + ": not a partial file (no sis:partial)");
   auto in = ImageInput::open(path);
@@ -243,8 +243,7 @@ Partial read_partial(const std::string& path) {
     // what it holds
     p.bands = parse_runs("sis:bands", get("sis:bands"), p.band_count);
     if (p.bands.empty()) throw Bad("sis:bands: none");
-    p.label = get("sis:label");
-    if (p.label.empty()) p.label = path;
+    p.label = path;  // messages name the file the user gave (sis:label: its inputs)
     p.integer_bits = int(whole("sis:integer_bits", get("sis:integer_bits"), 0, 32));
     p.half = whole("sis:half", get("sis:half"), 0, 1);
     p.nonfinite.count = whole("sis:nonfinite_count", get("sis:nonfinite_count"));
@@ -271,6 +270,7 @@ Partial read_partial(const std::string& path) {
       throw Bad("its tables of rows do not match its parts' heights");
     p.acquisition.size = std::size_t(sums.width) * C;
     p.range.size = std::size_t(range.width) * C;
+    if (!values) return p;
     const double bytes = 8.0 * double(sums.width) * sums.height * C +
                          4.0 * double(range.width) * range.height * C;
     check_memory(std::uint64_t(2 * bytes) + (64u << 20), "the partial " + path);

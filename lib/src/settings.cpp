@@ -1,5 +1,7 @@
 #include "sis/settings.h"
 
+#include "sis/partial.h"
+
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -167,6 +169,55 @@ std::pair<long, long> output_size(const Settings& o, const Resolved& r, long w, 
   return {ow, oh};
 }
 
+namespace {
+// The options a coefficient file or partial records (what: "X is a
+// coefficient file"): RequestError when given.
+void refuse_recorded(const Settings& o, const Resolved& r, const std::string& what) {
+  if (o.generator_given || o.method_given || o.boundary_given || o.highlight_compress)
+    throw RequestError(what + ": the generator, method, boundary and highlight compression are "
+                       "recorded there; drop --generator, --method, --boundary and "
+                       "--highlight-compress");
+  if (o.lattice_given || o.density_given)
+    throw RequestError(what + ": the lattice is recorded there; drop --lattice and --density");
+  if (r.input_transfer)
+    throw RequestError(what + ": the input's transfer was decoded before projecting; drop "
+                       "--input-transfer");
+}
+
+ProjectionRequest projection_request(const Settings& o, const Resolved& r, const InputSet& set,
+                                     const FormRequest& fr, long* width, long* height) {
+  if (!o.factor && !o.scale && !r.size.given())
+    throw RequestError("give the output size: --factor S (output = input / S), --size WxH "
+                       "(or W, 0xH, P%) or --scale M (output = input x M)");
+  std::tie(*width, *height) = output_size(o, r, set.width, set.height);
+  ProjectionRequest rq;
+  rq.width = *width;
+  rq.height = *height;
+  rq.space = r.space;
+  rq.method = r.method;
+  rq.boundary = r.boundary;
+  rq.prefilter = r.prefilter;
+  rq.zero_nonfinite = r.zero_nonfinite;
+  rq.highlight_compress = r.highlight_compress;
+  rq.input_transfer = r.input_transfer;
+  rq.threads = r.threads;
+  rq.coefficient_file = fr.coefficient_file;
+  rq.float_coefficients = fr.float_coefficients;
+  rq.progress = fr.progress;
+  rq.interrupt = fr.interrupt;
+  return rq;
+}
+}  // namespace
+
+Partial form_partial(const Settings& o, const Resolved& r, InputSet set, const FormRequest& fr) {
+  if (set.coefficient_file || set.partial_files)
+    throw RequestError(set.label + ": a partial is made of samples, not of " +
+                       (set.coefficient_file ? "a coefficient file" : "partial files"));
+  long W = 0, H = 0;
+  const ProjectionRequest rq = projection_request(o, r, set, fr, &W, &H);
+  return project_partial(rq, std::move(set));
+}
+
 Formed form(const Settings& o, const Resolved& r, InputSet set, const FormRequest& fr) {
   Formed f;
   const int threads = r.threads;
@@ -216,27 +267,19 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
                                         std::to_string(set.channels) + " output");
     f.inputs = std::move(set);
   } else {
-    if (!o.factor && !o.scale && !r.size.given())
-      throw RequestError("give the output size: --factor S (output = input / S), --size WxH "
-                         "(or W, 0xH, P%) or --scale M (output = input x M)");
-    std::tie(f.width, f.height) = output_size(o, r, set.width, set.height);
-    f.input_half = set.half;
-    ProjectionRequest rq;
-    rq.width = f.width;
-    rq.height = f.height;
-    rq.space = r.space;
-    rq.method = r.method;
-    rq.boundary = r.boundary;
-    rq.prefilter = r.prefilter;
-    rq.zero_nonfinite = r.zero_nonfinite;
-    rq.highlight_compress = r.highlight_compress;
-    rq.input_transfer = r.input_transfer;
-    rq.threads = threads;
-    rq.coefficient_file = fr.coefficient_file;
-    rq.float_coefficients = fr.float_coefficients;
-    rq.progress = fr.progress;
-    rq.interrupt = fr.interrupt;
-    Projection p = project(rq, std::move(set));
+    Projection p;
+    if (set.partial_files) {
+      refuse_recorded(o, r, set.label + " are partial files");
+      std::vector<Partial> parts;
+      for (const ProjectionInput& in : set.bands) parts.push_back(read_partial(in.path));
+      p = merge(parts, threads, fr.float_coefficients);
+      std::tie(f.width, f.height) = output_size(o, r, parts.front().width, parts.front().height);
+      f.input_half = p.inputs.half;
+    } else {
+      const ProjectionRequest rq = projection_request(o, r, set, fr, &f.width, &f.height);
+      f.input_half = set.half;
+      p = project(rq, std::move(set));
+    }
     f.replaced = p.nonfinite;
     if (p.nonfinite.count)
       f.warnings.push_back("replaced " + std::to_string(p.nonfinite.count) +

@@ -71,6 +71,7 @@ struct InputSet {
   Transfer transfer;   // the inputs' own (default_transfer: integer samples sRGB unless tagged)
   int integer_bits = 0;  // bits of integer samples (8, 16...), 0 for float or half
   bool coefficient_file = false;
+  bool partial_files = false;  // every input a partial file (sis/partial.h): merged, not read in bands
   std::string label;   // "render.exr and 2 more bands"
   std::vector<ProjectionInput> bands;  // in row order
   // The files' readers, in the inputs' order: open until the reading is

@@ -67,6 +67,7 @@ std::vector<long> band_cuts(long rows, long parts, long band_rows = kBandRows);
 void write_partial(const std::string& path, const Partial& p);
 bool is_partial_file(const ImageReader& reader);
 // InputError naming the file for a file that is not a whole partial.
-Partial read_partial(const std::string& path);
+// values = false: its metadata only (the sums and ranges left empty).
+Partial read_partial(const std::string& path, bool values = true);
 
 }  // namespace sis

@@ -102,11 +102,17 @@ struct Formed {
   std::uint64_t estimated_bytes = 0;
 };
 
-// Projects (or evaluates a coefficient file) and resamples, as siproject
-// does. The inputs inspected first by the caller, or by form().
+// Projects (or evaluates a coefficient file, or merges partial files) and
+// resamples, as siproject does. The inputs inspected first by the caller, or by form().
 Formed form(const Settings& settings, const Resolved& resolved, InputSet inputs,
             const FormRequest& request = {});
 Formed form(const Settings& settings, const std::vector<ProjectionInput>& inputs,
             const FormRequest& request = {});
+
+// The partial (sis/partial.h) of the bands the inputs hold
+// (inspect(inputs, true)), as siproject --partial makes it.
+struct Partial;
+Partial form_partial(const Settings& settings, const Resolved& resolved, InputSet inputs,
+                     const FormRequest& request = {});
 
 }  // namespace sis
