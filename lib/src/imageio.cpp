@@ -788,7 +788,6 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
         }
         if (!whole) {
           stop_at(b);
-          if (cb.stopped) cb.stopped(b);
           return;
         }
         cb.end(t, b);
@@ -798,7 +797,6 @@ long read_bands(const std::vector<BandSource>& sources, const BandPartition& ban
           if (b < error_band) error_band = b, error = std::current_exception();
         }
         stop_at(b);
-        if (cb.stopped) cb.stopped(b);
         return;
       }
     }

@@ -9,7 +9,6 @@
 #include <sstream>
 #include <thread>
 
-#include "sis/box_spline.h"
 #include "sis/projection.h"
 
 namespace sis {

@@ -200,10 +200,6 @@ struct BandCallbacks {
   std::function<void(int worker, long band)> begin;
   std::function<bool(int worker, const Strip& s)> strip;
   std::function<void(int worker, long band)> end;
-  // Optional: band `band` stopped (an error, or strip() returned false) and
-  // will not end, called on its worker before the later bands stop: a sink
-  // whose bands wait on earlier ones lets them go.
-  std::function<void(long band)> stopped;
 };
 long read_bands(const std::vector<std::string>& paths, const BandPartition& bands, long strip,
                 int workers, bool half, const BandCallbacks& callbacks);
