@@ -321,20 +321,43 @@ NonFiniteReport read_grid(const Reading& g, const BandPartition& bands, long fir
   return all;
 }
 
-// Reads the grid band by band into a space's acquisition sink (Sink:
-// CartesianSink or HexagonalSink, lib/src/space_sinks.h), a band of it and
-// of the local range per worker thread: each worker decodes its band's
-// strips and uses them while they are in its cache; other formats than
-// OpenEXR are read by one worker. The sink's band converts, checks,
-// decodes, folds, compresses and adds each strip, counting the non-finite
-// samples of each strip row (bad) and the first's value index (bad_first,
-// the least). Stops at the first band with a non-finite sample when `stop`.
+using RangeBands = std::vector<std::unique_ptr<LocalRange::Band>>;
+
+// One space's sink as the reading drives it: its band with the one range.
 template <typename Sink>
+struct OneSink {
+  Sink& sink;
+  const BandPartition& bands() const { return sink.bands(); }
+  class Band {
+   public:
+    Band(OneSink& one, const StripFormat& format) : band_(one.sink, format) {}
+    void begin(long b) { band_.begin(b); }
+    void add_strip(const Strip& s, const RangeBands& ranges, SampleStages::Counts& bad,
+                   SampleStages::Counts& bad_first) {
+      band_.add_strip(s, *ranges.front(), bad, bad_first);
+    }
+    void end() { band_.end(); }
+
+   private:
+    typename Sink::Band band_;
+  };
+};
+
+// Reads the grid band by band into the sinks (Sinks: OneSink of a space's
+// CartesianSink or HexagonalSink, or ManySinks; lib/src/space_sinks.h) and
+// the local ranges, a band of each per worker thread: each worker decodes
+// its band's strips and uses them while they are in its cache; other
+// formats than OpenEXR are read by one worker. The sinks' band converts,
+// checks, decodes, folds, compresses and adds each strip, counting the
+// non-finite samples of each strip row (bad) and the first's value index
+// (bad_first, the least). Stops at the first band with a non-finite sample
+// when `stop`.
+template <typename Sinks>
 NonFiniteReport acquire_in_bands(const InputSet& in, int threads, const SampleStages& stages,
-                                 Sink& sink, LocalRange& local, bool stop,
+                                 Sinks& sinks, const std::vector<LocalRange*>& locals, bool stop,
                                  const std::function<void(double)>& progress,
                                  const std::function<void()>& interrupt) {
-  const BandPartition& bands = sink.bands();
+  const BandPartition& bands = sinks.bands();
   const long first_band = bands.of(in.first_row);
   const Reading g = plan_reading(in, threads, bands);
   StripFormat format;
@@ -343,16 +366,16 @@ NonFiniteReport acquire_in_bands(const InputSet& in, int threads, const SampleSt
   format.row_size = std::size_t(in.width) * in.channels;
   format.threads = g.workers > 1 ? 1 : threads;  // threads within a band
   struct Worker {
-    std::unique_ptr<typename Sink::Band> acquisition;
-    std::unique_ptr<LocalRange::Band> range;
+    std::unique_ptr<typename Sinks::Band> acquisition;
+    RangeBands ranges;
     std::vector<std::atomic<long>> bad, bad_first;  // per strip row (pieces of a row run at once)
     explicit Worker(long rows) : bad(rows), bad_first(rows) {}
   };
   std::vector<std::unique_ptr<Worker>> w;
   for (int t = 0; t < g.workers; ++t) {
     w.push_back(std::make_unique<Worker>(g.strip));
-    w.back()->acquisition = std::make_unique<typename Sink::Band>(sink, format);
-    w.back()->range = std::make_unique<LocalRange::Band>(local);
+    w.back()->acquisition = std::make_unique<typename Sinks::Band>(sinks, format);
+    for (LocalRange* local : locals) w.back()->ranges.push_back(std::make_unique<LocalRange::Band>(*local));
   }
   std::vector<NonFiniteReport> bad(bands.count());  // per band, each written by the thread taking it
   std::mutex progress_mutex;
@@ -360,23 +383,23 @@ NonFiniteReport acquire_in_bands(const InputSet& in, int threads, const SampleSt
   BandCallbacks cb;
   cb.begin = [&](int t, long b) {
     w[t]->acquisition->begin(b);
-    w[t]->range->begin(b);
+    for (auto& range : w[t]->ranges) range->begin(b);
   };
   cb.strip = [&](int t, const Strip& s) {
     if (interrupt) interrupt();
     Worker& k = *w[t];
     const long y = s.global, rows = s.y1 - s.y0, y1 = y + rows;
     for (long r = 0; r < rows; ++r) k.bad[r] = 0, k.bad_first[r] = LONG_MAX;
-    k.range->open(y, y1);
-    k.acquisition->add_strip(s, *k.range, k.bad, k.bad_first);
-    k.range->close(y1);
+    for (auto& range : k.ranges) range->open(y, y1);
+    k.acquisition->add_strip(s, k.ranges, k.bad, k.bad_first);
+    for (auto& range : k.ranges) range->close(y1);
     NonFiniteReport& n = bad[bands.of(y)];
     add_nonfinite(n, k.bad, k.bad_first, rows, s.y0, in.channels, *s.path);
     return !(stop && n.count);
   };
   cb.end = [&](int t, long b) {
     w[t]->acquisition->end();
-    w[t]->range->end();
+    for (auto& range : w[t]->ranges) range->end();
     std::lock_guard<std::mutex> lock(progress_mutex);
     rows_done += bands.end(b) - bands.begin(b);
     if (progress) progress(double(rows_done) / std::max(1L, in.rows));
@@ -406,7 +429,8 @@ SpaceRequest space_request(long input_width, long input_height, int channels, lo
 
 // The frame's sides, the space's checks and the memory the projection
 // needs (RequestError before anything is read).
-std::uint64_t check_request(const Space& space, const SpaceRequest& srq, bool coefficient_file) {
+std::uint64_t check_request(const Space& space, const SpaceRequest& srq, bool coefficient_file,
+                            bool check_fit = true) {
   const long W = srq.width, H = srq.height;
   if (W < 1 || H < 1 || W > kMaxOutputSide || H > kMaxOutputSide) {
     std::ostringstream m;
@@ -419,7 +443,8 @@ std::uint64_t check_request(const Space& space, const SpaceRequest& srq, bool co
   });
   const std::uint64_t bytes = projection_bytes(W, H, srq.channels, budget.coefficients, true,
                                                coefficient_file, srq.threads, budget.tables);
-  check_memory(bytes, "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
+  if (check_fit)
+    check_memory(bytes, "a " + std::to_string(W) + " x " + std::to_string(H) + " x " +
                           std::to_string(srq.channels) + " output");
   return bytes;
 }
@@ -458,42 +483,47 @@ Coefficients finish_coefficients(Coefficients k, PrefilterMethod method, int thr
   return k;
 }
 
-// Reads the inputs (all the grid's bands, or the whole bands a partial's
-// inputs hold) into the space's sink and a local range; then done(sink,
-// range, report) while the sink lives.
-template <typename Done>
-void acquire_inputs(const ProjectionRequest& rq, const InputSet& in, const SpaceRequest& srq,
-                    Projection& p, const Done& done) {
+// The sample stages the request asks for on these inputs (the transfer
+// decoded and the highlight compression recorded in p).
+SampleStages sample_stages(const ProjectionRequest& rq, const InputSet& in, Projection& p) {
   const int C = in.channels;
   const int alpha = in.alpha;
-  auto for_colour = [C, alpha](float* data, std::size_t n, double (*f)(double), std::size_t k0) {
-    for (std::size_t q = 0; q < n; ++q)
-      if (int((k0 + q) % C) != alpha) data[q] = static_cast<float>(f(data[q]));
-  };
   // Display-encoded samples (by default integer ones: PNG, JPEG, TIFF...,
   // default_transfer) are decoded to linear light first: the method filters
   // radiance, and an 8-bit output encodes again (a flat 128 stays 128).
   SampleStages stages;
-  ValueHook& decode = stages.decode;
-  ValueHook& compress = stages.compress;
   p.transfer = rq.input_transfer ? *rq.input_transfer : in.transfer;
   if (p.transfer.kind != Transfer::Linear)
-    decode = [&, t = p.transfer](float* v, std::size_t n, std::size_t k0) {
+    stages.decode = [C, alpha, t = p.transfer](float* v, std::size_t n, std::size_t k0) {
       decode_to_linear(t, v, n, C, alpha, k0);
     };
   if (rq.highlight_compress)
-    compress = [&](float* v, std::size_t n, std::size_t k0) { for_colour(v, n, highlight_compress, k0); };
+    stages.compress = [C, alpha](float* v, std::size_t n, std::size_t k0) {
+      for (std::size_t q = 0; q < n; ++q)
+        if (int((k0 + q) % C) != alpha) v[q] = static_cast<float>(highlight_compress(v[q]));
+    };
   p.highlight_compressed = rq.highlight_compress;
+  return stages;
+}
+
+// Reads the inputs (all the grid's bands, or the whole bands a partial's
+// inputs hold) into the space's sink and a local range; then done(sink)
+// while the sink lives.
+template <typename Done>
+void acquire_inputs(const ProjectionRequest& rq, const InputSet& in, const SpaceRequest& srq,
+                    Projection& p, const Done& done) {
+  const SampleStages stages = sample_stages(rq, in, p);
   const bool stop = !rq.zero_nonfinite;
   const auto t = Clock::now();
   visit_space(rq.space, [&](const auto& space) {
     // The plan (the weights of every input row and column, some
     // milliseconds) is made while the first strips decode.
     const auto sink = space.sink(srq);
-    p.local_range = std::make_unique<LocalRange>(in.width, in.height, C, srq.width, srq.height,
-                                                 sink->bands().band_rows());
-    NonFiniteReport bad = acquire_in_bands(in, srq.threads, stages, *sink, *p.local_range, stop,
-                                           rq.progress, rq.interrupt);
+    p.local_range = std::make_unique<LocalRange>(in.width, in.height, in.channels, srq.width,
+                                                 srq.height, sink->bands().band_rows());
+    OneSink<typename std::decay_t<decltype(*sink)>> one{*sink};
+    NonFiniteReport bad = acquire_in_bands(in, srq.threads, stages, one, {p.local_range.get()},
+                                           stop, rq.progress, rq.interrupt);
     p.acquire_seconds = seconds_since(t);
     for (auto& r : p.inputs.readers) r->release();  // the decoders' buffers, before the later stages
     report_nonfinite(bad, in.channel_names, stop);
@@ -523,6 +553,80 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
 }
 
 Projection project(const ProjectionRequest& rq) { return project(rq, inspect(rq.inputs)); }
+
+std::vector<Projection> project(const std::vector<ProjectionRequest>& requests) {
+  if (requests.empty()) throw RequestError("project(): no target");
+  const ProjectionRequest& rq = requests.front();
+  for (std::size_t q = 1; q < requests.size(); ++q) {
+    const ProjectionRequest& other = requests[q];
+    const char* differs = !other.inputs.empty()                          ? "inputs"
+                          : other.zero_nonfinite != rq.zero_nonfinite       ? "--nonfinite"
+                          : other.highlight_compress != rq.highlight_compress ? "--highlight-compress"
+                          : other.input_transfer != rq.input_transfer       ? "--input-transfer"
+                                                                            : nullptr;
+    if (differs)
+      throw RequestError("target " + std::to_string(q + 1) + " of one reading gives its own " +
+                         differs + ": the targets after the first share the first's inputs "
+                         "and sample stages (leave their inputs empty)");
+  }
+  InputSet in = inspect(rq.inputs);
+  if (in.coefficient_file)
+    throw RequestError(in.bands.front().path +
+                       " is a coefficient file: it is evaluated (load_coefficients), not projected");
+  const int threads = std::max(1, rq.threads);
+  const std::size_t N = requests.size();
+  std::vector<SpaceRequest> srq;
+  std::vector<Projection> p(N);
+  std::uint64_t bytes = 0;
+  for (std::size_t q = 0; q < N; ++q) {
+    const ProjectionRequest& r = requests[q];
+    srq.push_back(space_request(in.width, in.height, in.channels, r.width, r.height, r.method,
+                                r.prefilter, r.boundary, threads));
+    p[q].estimated_bytes = check_request(r.space, srq[q], r.coefficient_file, false);
+    bytes += p[q].estimated_bytes;
+  }
+  check_memory(bytes, std::to_string(N) + " outputs of one reading");
+  const SampleStages stages = sample_stages(rq, in, p.front());
+  for (Projection& each : p) {
+    each.transfer = p.front().transfer;
+    each.highlight_compressed = p.front().highlight_compressed;
+  }
+  // every target's sink, held while the reading feeds them all
+  ManySinks many;
+  std::vector<std::shared_ptr<void>> held(N);
+  std::vector<std::function<Coefficients()>> finish(N);
+  std::vector<LocalRange*> locals;
+  for (std::size_t q = 0; q < N; ++q)
+    visit_space(requests[q].space, [&](const auto& space) {
+      std::shared_ptr<typename std::decay_t<decltype(space)>::Sink> sink = space.sink(srq[q]);
+      many.add(*sink);
+      finish[q] = [raw = sink.get()] { return raw->finish(); };
+      held[q] = sink;
+      p[q].local_range = std::make_unique<LocalRange>(in.width, in.height, in.channels,
+                                                      srq[q].width, srq[q].height,
+                                                      sink->bands().band_rows());
+      locals.push_back(p[q].local_range.get());
+    });
+  const bool stop = !rq.zero_nonfinite;
+  const auto t = Clock::now();
+  NonFiniteReport bad =
+      acquire_in_bands(in, threads, stages, many, locals, stop, rq.progress, rq.interrupt);
+  const double acquire_seconds = seconds_since(t);
+  for (auto& r : in.readers) r->release();
+  report_nonfinite(bad, in.channel_names, stop);
+  for (std::size_t q = 0; q < N; ++q) {
+    const ProjectionRequest& r = requests[q];
+    p[q].inputs = in;
+    p[q].nonfinite = bad;
+    p[q].acquire_seconds = acquire_seconds;
+    Coefficients k = finish[q]();
+    held[q].reset();
+    p[q].coefficients = finish_coefficients(std::move(k), r.prefilter, threads,
+                                            r.float_coefficients, in.label, in.channel_names,
+                                            &p[q].prefilter_seconds);
+  }
+  return p;
+}
 
 std::vector<long> band_cuts(long rows, long parts, long band_rows) {
   const BandPartition bands(rows, band_rows);

@@ -42,4 +42,33 @@ void HexagonalSink::Band::add_strip(const Strip& s, LocalRange::Band& range,
   band_.add_rows(y, y1, data);
 }
 
+ManySinks::Band::Band(ManySinks& many, const StripFormat& format) : format_(format) {
+  for (const auto& make : many.makers_) bands_.push_back(make(format));
+}
+
+void ManySinks::Band::add_strip(const Strip& s,
+                                const std::vector<std::unique_ptr<LocalRange::Band>>& ranges,
+                                SampleStages::Counts& bad, SampleStages::Counts& bad_first) {
+  const bool half = format_.half;
+  const std::size_t row_size = format_.row_size;
+  const SampleStages& stages = *format_.stages;
+  const int inner = format_.threads;
+  const long y = s.global, rows = s.y1 - s.y0, y1 = y + rows;
+  float* data = s.floats;
+  if (half) {
+    converted_.resize(std::size_t(rows) * row_size);
+    data = converted_.data();
+  }
+  parallel_for(rows, inner, [&](long r0, long r1) {
+    for (long r = r0; r < r1; ++r)
+      stages.scan(half ? s.half + r * row_size : nullptr, r, 0, long(row_size),
+                  data + r * row_size, bad, bad_first);
+  });
+  parallel_for(long(row_size), inner, [&](long k0, long k1) {
+    for (long r = 0; r < rows; ++r)
+      stages.transform(y + r, k0, k1, data + r * row_size + k0, ranges);
+  });
+  for (auto& band : bands_) band->add_values(y, y1, data);
+}
+
 }  // namespace sis

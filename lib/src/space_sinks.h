@@ -1,7 +1,9 @@
 #pragma once
 // The acquisition sinks of the spaces (internal to the library): what the
 // engine's band reading drives, one per space, with the same per-band
-// interface. Each sink owns its acquisition and its band partition; a
+// interface. Each sink owns its acquisition and its band partition (every
+// space's is bands of kBandRows input rows, so that one reading can feed
+// several sinks: ManySinks, below); a
 // Band takes bands in any order on any worker thread (begin(b), strips,
 // end()), and every strip passes the sample stages on the worker that
 // decoded it before the space sums it. Both sinks keep per-band partial
@@ -13,6 +15,7 @@
 #include <cstring>
 #include <functional>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 #include "sis/acquisition.h"
@@ -91,6 +94,14 @@ struct SampleStages {
     range.fold(y, k0, k1, v);
     if (compress) compress(v, n, std::size_t(k0));
   }
+  // The same, folded into each of several ranges (one reading, several targets).
+  void transform(long y, long k0, long k1, float* v,
+                 const std::vector<std::unique_ptr<LocalRange::Band>>& ranges) const {
+    const std::size_t n = std::size_t(k1 - k0);
+    if (decode) decode(v, n, std::size_t(k0));
+    for (const auto& range : ranges) range->fold(y, k0, k1, v);
+    if (compress) compress(v, n, std::size_t(k0));
+  }
 };
 
 // What a sink's band needs of the reading: the stages, whether strips come
@@ -119,6 +130,8 @@ class CartesianSink {
     void begin(long b) { band_.begin(b); }
     void add_strip(const Strip& s, LocalRange::Band& range, SampleStages::Counts& bad,
                    SampleStages::Counts& bad_first);
+    // Rows [y0, y1) of samples that have passed the stages, interleaved.
+    void add_values(long y0, long y1, const float* rows) { band_.add_rows(y0, y1, rows); }
     void end() { band_.end(); }
 
    private:
@@ -150,6 +163,7 @@ class HexagonalSink {
     void begin(long b) { band_.begin(b); }
     void add_strip(const Strip& s, LocalRange::Band& range, SampleStages::Counts& bad,
                    SampleStages::Counts& bad_first);
+    void add_values(long y0, long y1, const float* rows) { band_.add_rows(y0, y1, rows); }
     void end() { band_.end(); }
 
    private:
@@ -164,6 +178,67 @@ class HexagonalSink {
  private:
   HexAcquisitionPlan plan_;
   HexAcquisition whole_;
+};
+
+// Several sinks fed by one reading (several targets from one read): every
+// strip passes the stages once, as in the hexagonal sink (scanned row by
+// row, then decoded, folded into each target's range and compressed column
+// piece by column piece on the band's threads), and its values go to each
+// sink's band in the order the sinks were added. Each sink sums the same
+// values in its own order, so each result is the bits of its own reading.
+class ManySinks {
+  struct AnyBand {
+    virtual ~AnyBand() = default;
+    virtual void begin(long band) = 0;
+    virtual void add_values(long y0, long y1, const float* rows) = 0;
+    virtual void end() = 0;
+  };
+  template <typename Sink>
+  struct BandOf final : AnyBand {
+    BandOf(Sink& sink, const StripFormat& format) : band(sink, format) {}
+    void begin(long b) override { band.begin(b); }
+    void add_values(long y0, long y1, const float* rows) override { band.add_values(y0, y1, rows); }
+    void end() override { band.end(); }
+    typename Sink::Band band;
+  };
+
+ public:
+  // A sink whose bands are the others' (std::logic_error if not); it must
+  // outlive the reading.
+  template <typename Sink>
+  void add(Sink& sink) {
+    const BandPartition& b = sink.bands();
+    if (!makers_.empty() && (b.rows() != bands_.rows() || b.band_rows() != bands_.band_rows()))
+      throw std::logic_error("ManySinks::add(): the sinks' bands differ");
+    bands_ = b;
+    makers_.push_back([&sink](const StripFormat& format) -> std::unique_ptr<AnyBand> {
+      return std::make_unique<BandOf<Sink>>(sink, format);
+    });
+  }
+  const BandPartition& bands() const { return bands_; }
+  std::size_t size() const { return makers_.size(); }
+
+  class Band {
+   public:
+    Band(ManySinks& many, const StripFormat& format);
+    void begin(long b) {
+      for (auto& band : bands_) band->begin(b);
+    }
+    void add_strip(const Strip& s, const std::vector<std::unique_ptr<LocalRange::Band>>& ranges,
+                   SampleStages::Counts& bad, SampleStages::Counts& bad_first);
+    void end() {
+      for (auto& band : bands_) band->end();
+    }
+
+   private:
+    StripFormat format_;
+    std::vector<std::unique_ptr<AnyBand>> bands_;
+    Buffer<float> converted_;  // a half strip as float
+  };
+
+ private:
+  std::vector<std::function<std::unique_ptr<AnyBand>(const StripFormat&)>> makers_;
+  BandPartition bands_;
 };
 
 }  // namespace sis

@@ -134,6 +134,16 @@ struct Projection {
 Projection project(const ProjectionRequest& request);
 Projection project(const ProjectionRequest& request, InputSet inspected);
 
+// Several targets from one reading of the inputs (a pyramid's levels, two
+// spaces): each request has its own frame, space, method, boundary,
+// prefilter and coefficient type; the first's inputs, sample stages
+// (input_transfer, highlight_compress, zero_nonfinite), threads, progress
+// and interrupt serve all, and the later requests leave their inputs empty
+// (RequestError otherwise). The samples are read and pass the stages once;
+// each Projection holds the bits project() gives its request alone. The
+// memory check is of all the targets together.
+std::vector<Projection> project(const std::vector<ProjectionRequest>& requests);
+
 // A coefficient file, read and checked: non-finite coefficients are an
 // InputError, or replaced by 0 (counted in `replaced`). With `expected`
 // (the signature of a reader that read its header first), a file that is
