@@ -3,8 +3,11 @@
 // build/tests/microbench (make microbench).
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
+#include <filesystem>
 #include <random>
 
+#include "sis/engine.h"
 #include "sis/projection.h"
 
 using namespace sis;
@@ -59,6 +62,42 @@ void BM_Resample(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(resample(k, display, 1000, 1000, 1));
 }
 BENCHMARK(BM_Resample)->ArgNames({"degree", "2x2"})->ArgsProduct({{1, 3}, {0, 1}})->Unit(benchmark::kMillisecond);
+
+// Three levels of a pyramid (1000^2, 500^2, 250^2, min-error cubic) from a
+// 4000 x 4000 RGB image, in memory (file 0) or a half OpenEXR file written
+// to the temporary folder (file 1, OpenImageIO's default compression), on 2
+// threads: one reading feeding the three sinks (one_read 1) against three
+// projections (one_read 0).
+void BM_Targets(benchmark::State& state) {
+  static const Image in = noise_image(4000, 4000, 3);
+  static const std::string file = [] {
+    const std::string p = (std::filesystem::temp_directory_path() / "sis_microbench_targets.exr").string();
+    write_image(p, in, {}, {}, -1, WriteOptions(SampleFormat::Half));
+    std::atexit([] { std::filesystem::remove(std::filesystem::temp_directory_path() / "sis_microbench_targets.exr"); });
+    return p;
+  }();
+  std::vector<ProjectionRequest> all;
+  for (long side : {1000L, 500L, 250L}) {
+    ProjectionRequest rq;
+    if (all.empty())
+      rq.inputs = {state.range(1) ? ProjectionInput::file(file) : ProjectionInput::memory(in)};
+    rq.width = rq.height = side;
+    rq.threads = 2;
+    all.push_back(rq);
+  }
+  for (auto _ : state) {
+    if (state.range(0)) {
+      benchmark::DoNotOptimize(project(all));
+    } else {
+      for (ProjectionRequest rq : all) {
+        rq.inputs = all.front().inputs;
+        benchmark::DoNotOptimize(project(rq));
+      }
+    }
+  }
+  state.SetItemsProcessed(state.iterations() * in.width * in.height);
+}
+BENCHMARK(BM_Targets)->ArgNames({"one_read", "file"})->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 
