@@ -2,11 +2,15 @@
 #include "sis/scattered.h"
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+
+#include "sis/parallel.h"
 
 namespace sis {
 namespace {
@@ -14,53 +18,135 @@ namespace {
 // At most this many taps per axis: a radius of 7.5 lattice steps (degree 14).
 constexpr int kMaxTaps = 16;
 
-// The taps of one axis for one sample: extended indices m folded into
-// [0, n) by the boundary rule, and phi(u - m) with u the sample's lattice
-// coordinate (closed forms for the B-splines of degree <= 3).
-struct AxisTaps {
-  int count = 0;
-  long index[kMaxTaps];
-  double weight[kMaxTaps];
+// Samples are checked, and the threads' rows planned, in blocks of this many.
+constexpr long kBlock = 4096;
+
+// The taps of one axis for a sample at lattice coordinate u: a rule returns
+// the first tap's extended index m0 and writes phi(u - m0 - a), a < count(),
+// from the generator's polynomial pieces (K: the count when fixed, else 0).
+struct BoxTaps {
+  static constexpr int K = 1;
+  int count() const { return 1; }
+  long operator()(double u, double* w) const {
+    w[0] = 1.0;
+    return long(std::floor(u + 0.5));
+  }
 };
 
-void axis_taps(const Kernel& k, double u, long n, Boundary boundary, AxisTaps& t) {
-  long m0;
-  if (k.is_bspline() && k.degree() <= 3) {
-    const int d = k.degree();
-    if (d == 0) {
-      m0 = long(std::floor(u + 0.5));
-      t.count = 1;
-      t.weight[0] = 1.0;
-    } else if (d == 1) {
-      const double b = std::floor(u), f = u - b;
-      m0 = long(b);
-      t.count = 2;
-      t.weight[0] = 1 - f;
-      t.weight[1] = f;
-    } else if (d == 2) {
-      const double b = std::floor(u + 0.5), g = u - b;
-      m0 = long(b) - 1;
-      t.count = 3;
-      t.weight[0] = 0.5 * (0.5 - g) * (0.5 - g);
-      t.weight[1] = 0.75 - g * g;
-      t.weight[2] = 0.5 * (0.5 + g) * (0.5 + g);
-    } else {
-      const double b = std::floor(u), f = u - b, f2 = f * f, f3 = f2 * f, g = 1 - f;
-      m0 = long(b) - 1;
-      t.count = 4;
-      t.weight[0] = g * g * g / 6;
-      t.weight[1] = (4 - 6 * f2 + 3 * f3) / 6;
-      t.weight[2] = (1 + 3 * f + 3 * f2 - 3 * f3) / 6;
-      t.weight[3] = f3 / 6;
-    }
-  } else {
-    const double R = k.radius();
-    m0 = long(std::ceil(u - R));
-    const long m1 = long(std::floor(u + R));
-    t.count = int(m1 - m0 + 1);
-    for (int j = 0; j < t.count; ++j) t.weight[j] = k.eval(u - double(m0 + j));
+struct TentTaps {
+  static constexpr int K = 2;
+  int count() const { return 2; }
+  long operator()(double u, double* w) const {
+    const double b = std::floor(u), f = u - b;
+    w[0] = 1 - f;
+    w[1] = f;
+    return long(b);
   }
-  for (int j = 0; j < t.count; ++j) t.index[j] = extend_index(m0 + j, n, boundary);
+};
+
+struct QuadraticTaps {
+  static constexpr int K = 3;
+  int count() const { return 3; }
+  long operator()(double u, double* w) const {
+    const double b = std::floor(u + 0.5), g = u - b;
+    w[0] = 0.5 * (0.5 - g) * (0.5 - g);
+    w[1] = 0.75 - g * g;
+    w[2] = 0.5 * (0.5 + g) * (0.5 + g);
+    return long(b) - 1;
+  }
+};
+
+struct CubicTaps {
+  static constexpr int K = 4;
+  int count() const { return 4; }
+  long operator()(double u, double* w) const {
+    const double b = std::floor(u), f = u - b, f2 = f * f, f3 = f2 * f, g = 1 - f;
+    w[0] = g * g * g / 6;
+    w[1] = (4 - 6 * f2 + 3 * f3) / 6;
+    w[2] = (1 + 3 * f + 3 * f2 - 3 * f3) / 6;
+    w[3] = f3 / 6;
+    return long(b) - 1;
+  }
+};
+
+// Mitchell-Netravali: the piece for |x| < 1 at f and 1 - f, the piece for
+// 1 <= |x| < 2 at 1 + f and 2 - f.
+struct MitchellTaps {
+  static constexpr int K = 4;
+  double n3, n2, n0, f3, f2, f1, f0;
+  explicit MitchellTaps(const Kernel& k) {
+    const double B = k.param(0), C = k.param(1);
+    n3 = (12 - 9 * B - 6 * C) / 6;
+    n2 = (-18 + 12 * B + 6 * C) / 6;
+    n0 = (6 - 2 * B) / 6;
+    f3 = (-B - 6 * C) / 6;
+    f2 = (6 * B + 30 * C) / 6;
+    f1 = (-12 * B - 48 * C) / 6;
+    f0 = (8 * B + 24 * C) / 6;
+  }
+  int count() const { return 4; }
+  double near(double t) const { return (n3 * t + n2) * t * t + n0; }
+  double far(double t) const { return ((f3 * t + f2) * t + f1) * t + f0; }
+  long operator()(double u, double* w) const {
+    const double b = std::floor(u), f = u - b;
+    w[0] = far(1 + f);
+    w[1] = near(f);
+    w[2] = near(1 - f);
+    w[3] = far(2 - f);
+    return long(b) - 1;
+  }
+};
+
+// A B-spline of any degree d: its d + 1 pieces at the sample by the
+// Cox-de Boor recursion on the integer knots.
+struct BSplineTaps {
+  static constexpr int K = 0;
+  int d;
+  int count() const { return d + 1; }
+  long operator()(double u, double* w) const {
+    const double z = u + 0.5 * (d + 1), k = std::floor(z), t = z - k;
+    w[0] = 1.0;
+    for (int q = 1; q <= d; ++q) {
+      // w[j] <- ((t - j + q) w[j - 1] + (j + 1 - t) w[j]) / q, j from q down
+      w[q] = (t * w[q - 1]) / q;
+      for (int j = q - 1; j >= 1; --j) w[j] = ((t - j + q) * w[j - 1] + (j + 1 - t) * w[j]) / q;
+      w[0] = ((1 - t) * w[0]) / q;
+    }
+    return long(k) - d;
+  }
+};
+
+// Any other kernel: its value at each of the taps its radius can reach
+// (those beyond its support are 0).
+struct KernelTaps {
+  static constexpr int K = 0;
+  const Kernel* kernel;
+  int n;
+  double radius;
+  explicit KernelTaps(const Kernel& k)
+      : kernel(&k), n(int(std::floor(2 * k.radius())) + 1), radius(k.radius()) {}
+  int count() const { return n; }
+  long operator()(double u, double* w) const {
+    const long m0 = long(std::ceil(u - radius));
+    for (int j = 0; j < n; ++j) w[j] = kernel->eval(u - double(m0 + j));
+    return m0;
+  }
+};
+
+// Calls f(taps) with the generator's rule.
+template <typename F>
+void with_taps(const Kernel& k, F&& f) {
+  if (k.is_bspline()) {
+    switch (k.degree()) {
+      case 0: return f(BoxTaps{});
+      case 1: return f(TentTaps{});
+      case 2: return f(QuadraticTaps{});
+      case 3: return f(CubicTaps{});
+      default: return f(BSplineTaps{k.degree()});
+    }
+  }
+  if (k.kind() == KernelKind::Mitchell) return f(MitchellTaps(k));
+  return f(KernelTaps(k));
 }
 
 struct Geometry {
@@ -95,7 +181,7 @@ Geometry geometry(const ScatteredTarget& t) {
   throw std::invalid_argument(s.str());
 }
 
-void check(const ScatteredSamples& s, const ScatteredTarget& t, int channels) {
+void check_counts(const ScatteredSamples& s, int channels) {
   if (s.channels < 1) throw std::invalid_argument("scattered samples: channels must be >= 1");
   if (s.channels != channels) {
     std::ostringstream m;
@@ -119,7 +205,11 @@ void check(const ScatteredSamples& s, const ScatteredTarget& t, int channels) {
     count_error("weights", s.weights.size(), std::size_t(n));
   if (!s.times.empty() && s.times.size() != std::size_t(n))
     count_error("times", s.times.size(), std::size_t(n));
-  for (long i = 0; i < n; ++i) {
+}
+
+// The first bad sample, named: what runs once the fast check has found one.
+void name_bad_sample(const ScatteredSamples& s, const ScatteredTarget& t) {
+  for (long i = 0; i < s.count(); ++i) {
     const double x = s.positions[2 * i], y = s.positions[2 * i + 1];
     if (!std::isfinite(x) || !std::isfinite(y)) bad_sample(i, "has a non-finite position");
     if (x < 0 || x > t.width || y < 0 || y > t.height) {
@@ -136,59 +226,298 @@ void check(const ScatteredSamples& s, const ScatteredTarget& t, int channels) {
   }
 }
 
-double sample_weight(const ScatteredSamples& s, const ScatteredTarget& t, long i) {
-  return s.weights.empty() ? t.width * t.height / double(s.count()) : s.weights[i];
+// Whether samples [i0, i1) are good: positions in the frame (NaN fails the
+// comparisons), weights finite and > 0, values finite. Branch-free, so that
+// it vectorises.
+__attribute__((target_clones("avx512f", "avx2", "default"))) bool samples_good(
+    const double* pos, const double* val, const double* wts, int C, long i0, long i1, double W,
+    double H) {
+  int ok = 1;
+  for (long e = 2 * i0; e < 2 * i1; e += 2) {
+    const double x = pos[e], y = pos[e + 1];
+    ok &= int(x >= 0) & int(x <= W) & int(y >= 0) & int(y <= H);
+  }
+  if (wts)
+    for (long i = i0; i < i1; ++i) ok &= int(wts[i] > 0) & int(wts[i] <= DBL_MAX);
+  for (long e = i0 * C; e < i1 * C; ++e) ok &= int(std::abs(val[e]) <= DBL_MAX);
+  return ok != 0;
 }
 
-// For every sample in order: visit(i, w_i, taps_x, taps_y).
-template <typename F>
-void for_each_sample(const ScatteredSamples& s, const ScatteredTarget& t, const Geometry& g,
-                     F&& visit) {
-  AxisTaps tx, ty;
-  const long n = s.count();
-  for (long i = 0; i < n; ++i) {
-    axis_taps(t.generator, (s.positions[2 * i] - g.ox) / g.hx, g.nx, t.boundary, tx);
-    axis_taps(t.generator, (s.positions[2 * i + 1] - g.oy) / g.hy, g.ny, t.boundary, ty);
-    visit(i, sample_weight(s, t, i), tx, ty);
+// Throws std::invalid_argument, naming the first bad sample, unless every
+// sample is good.
+void check(const ScatteredSamples& s, const ScatteredTarget& t, int channels, int threads) {
+  check_counts(s, channels);
+  const long n = s.count(), blocks = (n + kBlock - 1) / kBlock;
+  std::vector<char> good(blocks, 1);
+  const double* wts = s.weights.empty() ? nullptr : s.weights.data();
+  parallel_for(blocks, threads, [&](long b0, long b1) {
+    for (long b = b0; b < b1; ++b)
+      good[b] = samples_good(s.positions.data(), s.values.data(), wts, s.channels, b * kBlock,
+                             std::min(n, (b + 1) * kBlock), t.width, t.height);
+  });
+  if (std::find(good.begin(), good.end(), 0) != good.end()) name_bad_sample(s, t);
+}
+
+// The samples of a pass: positions (x, y), `width` values each, weights
+// (null: w0 each).
+struct Batch {
+  const double* pos;
+  const double* val;
+  const double* wts;
+  double w0;
+  int width;
+  long n;
+  double weight(long i) const { return wts ? wts[i] : w0; }
+};
+
+Batch batch(const ScatteredSamples& s, const ScatteredTarget& t, const double* values, int width) {
+  return {s.positions.data(), values, s.weights.empty() ? nullptr : s.weights.data(),
+          s.count() > 0 ? t.width * t.height / double(s.count()) : 0.0, width, s.count()};
+}
+
+// Positions to lattice coordinates and the folding of the taps.
+struct Axes {
+  long nx, ny;
+  double ox, oy, sx, sy;
+  Boundary boundary;
+};
+
+Axes axes(const Geometry& g, Boundary b) { return {g.nx, g.ny, g.ox, g.oy, 1.0 / g.hx, 1.0 / g.hy, b}; }
+
+// acc[n] += sum_i w_i phi_i,n (v_i, 1) over samples [i0, i1) in order, for
+// the coefficient rows [r0, r1): each coefficient holds A values, the
+// sample's `width` values and, where A = width + 1, the weight sum. Each
+// term is wy_b (wx_a (w_i v_i)), the same products in the same order
+// whether the sample's taps fold at the frame's edges or not, so a
+// coefficient's sum is the same bits however the rows are split among
+// threads. KK and AA: the taps and A when fixed, else 0.
+template <typename Taps, int AA>
+__attribute__((target_clones("avx512f", "avx2", "default"))) void splat_range(
+    const Taps& taps, const Axes& g, const Batch& s, int A_rt, double* acc, long i0, long i1,
+    long r0, long r1, double* scratch) {
+  constexpr int KS = Taps::K;
+  constexpr bool fixed = KS > 0 && AA > 0;
+  const int K = KS > 0 ? KS : taps.count();
+  const int A = AA > 0 ? AA : A_rt;
+  const int C = s.width;
+  const long nx = g.nx, ny = g.ny;
+  const std::size_t stride = std::size_t(nx) * A;
+  alignas(64) double fixed_p[fixed ? KS * AA : 1];
+  alignas(64) double fixed_v[AA > 0 ? AA : 1];
+  double* P = fixed ? fixed_p : scratch;
+  double* wv = AA > 0 ? fixed_v : scratch + K * A;
+  double wx[kMaxTaps], wy[kMaxTaps];
+  long ix[kMaxTaps];
+  for (long i = i0; i < i1; ++i) {
+    const long my = taps((s.pos[2 * i + 1] - g.oy) * g.sy, wy);
+    const bool inside_y = my >= 0 && my + K <= ny;
+    if (inside_y && (my + K <= r0 || my >= r1)) continue;
+    const long mx = taps((s.pos[2 * i] - g.ox) * g.sx, wx);
+    const double w = s.weight(i);
+    const double* v = s.val + std::size_t(i) * C;
+    for (int c = 0; c < C; ++c) wv[c] = w * v[c];
+    if (A > C) wv[C] = w;
+    for (int a = 0; a < K; ++a)
+      for (int c = 0; c < A; ++c) P[a * A + c] = wx[a] * wv[c];
+    if (inside_y && mx >= 0 && mx + K <= nx) {
+      double* base = acc + std::size_t(my) * stride + std::size_t(mx) * A;
+      const int b0 = int(std::max(0L, r0 - my)), b1 = int(std::min(long(K), r1 - my));
+      for (int b = b0; b < b1; ++b) {
+        double* row = base + std::size_t(b) * stride;
+        const double f = wy[b];
+        for (int j = 0; j < K * A; ++j) row[j] += f * P[j];
+      }
+    } else {
+      for (int a = 0; a < K; ++a) ix[a] = extend_index(mx + a, nx, g.boundary) * A;
+      for (int b = 0; b < K; ++b) {
+        const long r = extend_index(my + b, ny, g.boundary);
+        if (r < r0 || r >= r1) continue;
+        double* row = acc + std::size_t(r) * stride;
+        const double f = wy[b];
+        for (int a = 0; a < K; ++a) {
+          double* o = row + ix[a];
+          for (int c = 0; c < A; ++c) o[c] += f * P[a * A + c];
+        }
+      }
+    }
   }
 }
 
-// out += sum_i w_i v_i phi_i,n (the splat), v_i = values[i * C ...]; and
-// where given, weights += sum_i w_i phi_i,n in the same pass.
-void splat(const ScatteredSamples& s, const ScatteredTarget& t, const Geometry& g,
-           const double* values, Grid<double>& out, Grid<double>* weights = nullptr) {
-  const int C = out.channels;
-  for_each_sample(s, t, g, [&](long i, double w, const AxisTaps& tx, const AxisTaps& ty) {
-    const double* v = values + std::size_t(i) * C;
-    for (int b = 0; b < ty.count; ++b) {
-      double* row = out.row(ty.index[b]);
-      double* wrow = weights ? weights->row(ty.index[b]) : nullptr;
-      const double wy = w * ty.weight[b];
-      for (int a = 0; a < tx.count; ++a) {
-        const double ww = wy * tx.weight[a];
-        double* o = row + tx.index[a] * C;
-        for (int c = 0; c < C; ++c) o[c] += ww * v[c];
-        if (wrow) wrow[tx.index[a]] += ww;
+// out[i] = f_app(x_i) = sum_a wx_a (sum_b wy_b c[my + b, mx + a]) for
+// samples [i0, i1), the same products in the same order at the edges.
+template <typename Taps, int CC>
+__attribute__((target_clones("avx512f", "avx2", "default"))) void evaluate_range(
+    const Taps& taps, const Axes& g, const Batch& s, int C_rt, const double* coef, double* out,
+    long i0, long i1, double* scratch) {
+  constexpr int KS = Taps::K;
+  constexpr bool fixed = KS > 0 && CC > 0;
+  const int K = KS > 0 ? KS : taps.count();
+  const int C = CC > 0 ? CC : C_rt;
+  const long nx = g.nx, ny = g.ny;
+  const std::size_t stride = std::size_t(nx) * C;
+  alignas(64) double fixed_t[fixed ? KS * CC : 1];
+  double* T = fixed ? fixed_t : scratch;
+  double wx[kMaxTaps], wy[kMaxTaps];
+  long ix[kMaxTaps];
+  for (long i = i0; i < i1; ++i) {
+    const long my = taps((s.pos[2 * i + 1] - g.oy) * g.sy, wy);
+    const long mx = taps((s.pos[2 * i] - g.ox) * g.sx, wx);
+    if (my >= 0 && my + K <= ny && mx >= 0 && mx + K <= nx) {
+      const double* base = coef + std::size_t(my) * stride + std::size_t(mx) * C;
+      for (int j = 0; j < K * C; ++j) T[j] = wy[0] * base[j];
+      for (int b = 1; b < K; ++b) {
+        const double* row = base + std::size_t(b) * stride;
+        const double f = wy[b];
+        for (int j = 0; j < K * C; ++j) T[j] += f * row[j];
+      }
+    } else {
+      for (int a = 0; a < K; ++a) ix[a] = extend_index(mx + a, nx, g.boundary) * C;
+      const double* row0 = coef + std::size_t(extend_index(my, ny, g.boundary)) * stride;
+      for (int a = 0; a < K; ++a)
+        for (int c = 0; c < C; ++c) T[a * C + c] = wy[0] * row0[ix[a] + c];
+      for (int b = 1; b < K; ++b) {
+        const double* row = coef + std::size_t(extend_index(my + b, ny, g.boundary)) * stride;
+        const double f = wy[b];
+        for (int a = 0; a < K; ++a)
+          for (int c = 0; c < C; ++c) T[a * C + c] += f * row[ix[a] + c];
       }
     }
+    double* o = out + std::size_t(i) * C;
+    for (int c = 0; c < C; ++c) {
+      double v = wx[0] * T[c];
+      for (int a = 1; a < K; ++a) v += wx[a] * T[a * C + c];
+      o[c] = v;
+    }
+  }
+}
+
+// Calls f(std::integral_constant<int, A>) for A in 1..5, or with 0 for any
+// other A.
+template <typename F>
+void with_width(int A, F&& f) {
+  switch (A) {
+    case 1: return f(std::integral_constant<int, 1>{});
+    case 2: return f(std::integral_constant<int, 2>{});
+    case 3: return f(std::integral_constant<int, 3>{});
+    case 4: return f(std::integral_constant<int, 4>{});
+    case 5: return f(std::integral_constant<int, 5>{});
+    default: return f(std::integral_constant<int, 0>{});
+  }
+}
+
+// How the coefficient rows are split among threads for the splats: strip p
+// is rows [strips[p], strips[p + 1]); a thread visits the blocks of samples
+// whose taps reach its strip (rows[b]: the first and last row block b's
+// taps reach, [0, ny) when they fold at the top or bottom edge). Each
+// coefficient's sum runs over its samples in order whatever the strips, so
+// the strips only balance the work: each block's samples are spread evenly
+// over the rows it reaches, and the strips cut the total into equal parts.
+struct RowPlan {
+  std::vector<long> strips;
+  std::vector<std::pair<long, long>> rows;
+  long parts() const { return long(strips.size()) - 1; }
+};
+
+// Rows a sample's taps reach from the row of its lattice coordinate, either
+// side, at most.
+int reach(const Kernel& k) { return int(std::floor(2 * k.radius())) + 1; }
+
+RowPlan plan_rows(const ScatteredSamples& s, const Geometry& g, int K, int threads) {
+  RowPlan p;
+  const long n = s.count(), blocks = (n + kBlock - 1) / kBlock;
+  const long parts = std::min<long>(threads, g.ny);
+  if (parts <= 1 || blocks == 0) {
+    p.strips = {0, g.ny};
+    p.rows.assign(blocks, {0, g.ny - 1});
+    return p;
+  }
+  p.rows.resize(blocks);
+  const double sy = 1.0 / g.hy;
+  parallel_for(blocks, threads, [&](long b0, long b1) {
+    for (long b = b0; b < b1; ++b) {
+      double lo = INFINITY, hi = -INFINITY;
+      for (long i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+        const double v = s.positions[2 * i + 1];
+        lo = v < lo ? v : lo;
+        hi = v > hi ? v : hi;
+      }
+      long r0 = long(std::floor((lo - g.oy) * sy)) - K, r1 = long(std::floor((hi - g.oy) * sy)) + K;
+      if (r0 < 0 || r1 >= g.ny) r0 = 0, r1 = g.ny - 1;
+      p.rows[b] = {r0, r1};
+    }
+  });
+  std::vector<double> density(g.ny + 1, 0.0);
+  for (long b = 0; b < blocks; ++b) {
+    const long count = std::min(n, (b + 1) * kBlock) - b * kBlock;
+    const double per_row = double(count) / double(p.rows[b].second - p.rows[b].first + 1);
+    density[p.rows[b].first] += per_row;
+    density[p.rows[b].second + 1] -= per_row;
+  }
+  p.strips.assign(parts + 1, g.ny);
+  p.strips[0] = 0;
+  double level = 0, total = 0;
+  for (long r = 0; r < g.ny; ++r) total += (level += density[r]);
+  level = 0;
+  double sum = 0;
+  long part = 1;
+  for (long r = 0; r < g.ny && part < parts; ++r) {
+    sum += (level += density[r]);
+    while (part < parts && sum >= total * double(part) / double(parts)) p.strips[part++] = r + 1;
+  }
+  return p;
+}
+
+// acc += the splat of values (`width` each) at the samples, with the weight
+// sums in the same pass where acc holds width + 1 values a coefficient.
+void splat(const ScatteredSamples& s, const ScatteredTarget& t, const Geometry& g,
+           const RowPlan& plan, const double* values, int width, Grid<double>& acc, int threads) {
+  const Batch bt = batch(s, t, values, width);
+  const Axes ax = axes(g, t.boundary);
+  const int A = acc.channels;
+  const long n = s.count();
+  with_taps(t.generator, [&](const auto& taps) {
+    const int K = taps.count();
+    with_width(A, [&](auto a) {
+      constexpr int AA = decltype(a)::value;
+      auto run = [&](long p0, long p1) {
+        std::vector<double> scratch(std::size_t(K) * A + A);
+        for (long p = p0; p < p1; ++p) {
+          const long r0 = plan.strips[p], r1 = plan.strips[p + 1];
+          if (r0 == r1) continue;
+          for (long b = 0; b < long(plan.rows.size()); ++b) {
+            if (plan.rows[b].second < r0 || plan.rows[b].first >= r1) continue;
+            splat_range<std::decay_t<decltype(taps)>, AA>(taps, ax, bt, A, acc.data.data(),
+                                                          b * kBlock, std::min(n, (b + 1) * kBlock),
+                                                          r0, r1, scratch.data());
+          }
+        }
+      };
+      if (plan.parts() == 1)
+        run(0, 1);
+      else
+        parallel_for(plan.parts(), threads, run);
+    });
   });
 }
 
 // f_app at every sample, channel fastest.
 void evaluate(const ScatteredSamples& s, const ScatteredTarget& t, const Geometry& g,
-              const Grid<double>& c, double* out) {
+              const Grid<double>& c, double* out, int threads) {
+  const Batch bt = batch(s, t, nullptr, c.channels);
+  const Axes ax = axes(g, t.boundary);
   const int C = c.channels;
-  for_each_sample(s, t, g, [&](long i, double, const AxisTaps& tx, const AxisTaps& ty) {
-    double* v = out + std::size_t(i) * C;
-    for (int k = 0; k < C; ++k) v[k] = 0;
-    for (int b = 0; b < ty.count; ++b) {
-      const double* row = c.row(ty.index[b]);
-      for (int a = 0; a < tx.count; ++a) {
-        const double ww = ty.weight[b] * tx.weight[a];
-        const double* p = row + tx.index[a] * C;
-        for (int k = 0; k < C; ++k) v[k] += ww * p[k];
-      }
-    }
+  const long n = s.count(), blocks = (n + kBlock - 1) / kBlock;
+  with_taps(t.generator, [&](const auto& taps) {
+    const int K = taps.count();
+    with_width(C, [&](auto cc) {
+      constexpr int CC = decltype(cc)::value;
+      parallel_for(blocks, threads, [&](long b0, long b1) {
+        std::vector<double> scratch(std::size_t(K) * C);
+        evaluate_range<std::decay_t<decltype(taps)>, CC>(taps, ax, bt, C, c.data.data(), out,
+                                                          b0 * kBlock, std::min(n, b1 * kBlock),
+                                                          scratch.data());
+      });
+    });
   });
 }
 
@@ -231,21 +560,37 @@ ScatteredRule parse_scattered_rule(const std::string& spelling) {
                               "' (expected normalised, fit or plain)");
 }
 
-ScatteredAcquisition::ScatteredAcquisition(const ScatteredTarget& target, int channels)
-    : target_(target), channels_(channels) {
+ScatteredAcquisition::ScatteredAcquisition(const ScatteredTarget& target, int channels,
+                                           int threads)
+    : target_(target), channels_(channels), threads_(threads < 1 ? 1 : threads) {
   if (channels < 1) throw std::invalid_argument("scattered acquisition: channels must be >= 1");
   const Geometry g = geometry(target_);
-  num_ = Grid<double>(g.nx, g.ny, channels);
-  den_ = Grid<double>(g.nx, g.ny, 1);
+  sums_ = Grid<double>(g.nx, g.ny, channels + 1);
 }
 
-std::size_t ScatteredAcquisition::bytes() const {
-  return (num_.data.size() + den_.data.size()) * sizeof(double);
+std::size_t ScatteredAcquisition::bytes() const { return sums_.data.size() * sizeof(double); }
+
+Grid<double> ScatteredAcquisition::numerator() const {
+  Grid<double> out(sums_.width, sums_.height, channels_, kUnset);
+  const std::size_t n = std::size_t(sums_.width) * sums_.height;
+  for (std::size_t e = 0; e < n; ++e)
+    for (int c = 0; c < channels_; ++c)
+      out.data[e * channels_ + c] = sums_.data[e * (channels_ + 1) + c];
+  return out;
+}
+
+Grid<double> ScatteredAcquisition::denominator() const {
+  Grid<double> out(sums_.width, sums_.height, 1, kUnset);
+  const std::size_t n = std::size_t(sums_.width) * sums_.height;
+  for (std::size_t e = 0; e < n; ++e) out.data[e] = sums_.data[e * (channels_ + 1) + channels_];
+  return out;
 }
 
 void ScatteredAcquisition::add(const ScatteredSamples& s) {
-  check(s, target_, channels_);
-  splat(s, target_, geometry(target_), s.values.data(), num_, &den_);
+  check(s, target_, channels_, threads_);
+  const Geometry g = geometry(target_);
+  const RowPlan plan = plan_rows(s, g, reach(target_.generator), threads_);
+  splat(s, target_, g, plan, s.values.data(), channels_, sums_, threads_);
 }
 
 Coefficients ScatteredAcquisition::finish(ScatteredRule rule) const {
@@ -259,16 +604,19 @@ Coefficients ScatteredAcquisition::finish(ScatteredRule rule) const {
         std::string("scattered projection: the conventional method takes the normalised weighted "
                     "average, not the ") + scattered_rule_name(rule) + " rule");
   const Geometry g = geometry(target_);
-  Grid<double> r(g.nx, g.ny, channels_);
+  Grid<double> r(g.nx, g.ny, channels_, kUnset);
   // In lattice units the inner product of a flat 1 with phi is int phi
   // (1 for the B-splines); the plain sum's lattice-unit scale is 1 / (hx hy).
   const double integral = target_.generator.integral() * target_.generator.integral();
   const double plain = 1.0 / (g.hx * g.hy);
+  const int A = channels_ + 1;
   for (long y = 0; y < g.ny; ++y)
     for (long x = 0; x < g.nx; ++x) {
-      const double d = den_.at(x, y, 0);
+      const double* sum = sums_.data.data() + (std::size_t(y) * g.nx + x) * A;
+      double* out = &r.at(x, y, 0);
+      const double d = sum[channels_];
       if (rule == ScatteredRule::PlainSum) {
-        for (int c = 0; c < channels_; ++c) r.at(x, y, c) = num_.at(x, y, c) * plain;
+        for (int c = 0; c < channels_; ++c) out[c] = sum[c] * plain;
         continue;
       }
       if (!(d > 0)) {
@@ -279,14 +627,15 @@ Coefficients ScatteredAcquisition::finish(ScatteredRule rule) const {
         throw std::invalid_argument(m.str());
       }
       const double scale = min_error ? integral / d : 1.0 / d;
-      for (int c = 0; c < channels_; ++c) r.at(x, y, c) = num_.at(x, y, c) * scale;
+      for (int c = 0; c < channels_; ++c) out[c] = sum[c] * scale;
     }
   Coefficients k = make_coefficients(target_, std::move(r));
-  if (min_error) prefilter(k, 1, target_.prefilter);
+  if (min_error) prefilter(k, threads_, target_.prefilter);
   return k;
 }
 
-std::vector<double> evaluate_at_samples(const Coefficients& k, const ScatteredSamples& samples) {
+std::vector<double> evaluate_at_samples(const Coefficients& k, const ScatteredSamples& samples,
+                                        int threads) {
   ScatteredTarget t;
   t.width = k.image_width;
   t.height = k.image_height;
@@ -296,15 +645,16 @@ std::vector<double> evaluate_at_samples(const Coefficients& k, const ScatteredSa
   t.method = k.min_error ? Method::MinError : Method::Conventional;
   if (k.box_spline) throw std::invalid_argument("evaluate_at_samples: Cartesian coefficients only");
   const Geometry g = geometry(t);
-  check(samples, t, k.c.channels);
+  check(samples, t, k.c.channels, threads);
   std::vector<double> out(std::size_t(samples.count()) * k.c.channels);
-  evaluate(samples, t, g, k.c, out.data());
+  evaluate(samples, t, g, k.c, out.data(), threads);
   return out;
 }
 
 Coefficients project_scattered(const ScatteredSamples& samples, const ScatteredTarget& target,
                                const ScatteredOptions& options, ScatteredReport* report) {
-  ScatteredAcquisition acq(target, samples.channels);
+  const int threads = options.threads < 1 ? 1 : options.threads;
+  ScatteredAcquisition acq(target, samples.channels, threads);
   acq.add(samples);
   const ScatteredRule first =
       options.rule == ScatteredRule::LeastSquares ? ScatteredRule::NormalisedSum : options.rule;
@@ -323,8 +673,9 @@ Coefficients project_scattered(const ScatteredSamples& samples, const ScatteredT
     const Geometry g = geometry(target);
     const int C = samples.channels;
     const long N = samples.count();
+    const RowPlan rows = plan_rows(samples, g, reach(target.generator), threads);
     // b = sum_i w_i f_i phi_i,n is the numerator of the pass above.
-    const Grid<double>& b = acq.numerator();
+    const Grid<double> b = acq.numerator();
     Grid<double>& x = k.c;
     Grid<double> r(g.nx, g.ny, C), z(g.nx, g.ny, C), p(g.nx, g.ny, C), q(g.nx, g.ny, C);
     std::vector<double> at(std::size_t(N) * C);
@@ -334,14 +685,14 @@ Coefficients project_scattered(const ScatteredSamples& samples, const ScatteredT
       plan = std::make_unique<PrefilterPlan>(degree, g.nx, g.ny, target.boundary, target.prefilter);
     const double area = g.hx * g.hy;  // G ~ (hx hy) a
     auto apply_G = [&](const Grid<double>& v, Grid<double>& out) {
-      evaluate(samples, target, g, v, at.data());
+      evaluate(samples, target, g, v, at.data(), threads);
       std::fill(out.data.begin(), out.data.end(), 0.0);
-      splat(samples, target, g, at.data(), out);
+      splat(samples, target, g, rows, at.data(), C, out, threads);
       rep.passes += 2;
     };
     auto precondition = [&](const Grid<double>& in, Grid<double>& out) {
       for (std::size_t e = 0; e < in.data.size(); ++e) out.data[e] = in.data[e] / area;
-      if (plan) plan->execute(out, 1);
+      if (plan) plan->execute(out, threads);
     };
     auto dots = [&](const Grid<double>& u, const Grid<double>& v) {
       std::vector<double> s(C, 0.0);
@@ -386,7 +737,7 @@ Coefficients project_scattered(const ScatteredSamples& samples, const ScatteredT
     rep.iterations = it;
     rep.residual.resize(C);
     for (int c = 0; c < C; ++c) rep.residual[c] = bb[c] > 0 ? std::sqrt(rr[c] / bb[c]) : 0.0;
-    rep.bytes += (r.data.size() * 4) * sizeof(double) + at.size() * sizeof(double);
+    rep.bytes += (r.data.size() * 5) * sizeof(double) + at.size() * sizeof(double);
   }
   if (report) *report = rep;
   return k;

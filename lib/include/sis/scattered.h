@@ -72,6 +72,9 @@ struct ScatteredOptions {
   // when the residual's norm falls to tolerance times b's (per channel).
   int iterations = 5;
   double tolerance = 0;
+  // Threads of the passes and the prefilter; the result is the same bits
+  // for any count.
+  int threads = 1;
 };
 
 struct ScatteredReport {
@@ -82,29 +85,33 @@ struct ScatteredReport {
 };
 
 // Streams samples into the sums of one pass: numerator sum_i w_i f_i phi_i,n
-// per channel and denominator sum_i w_i phi_i,n, in the order the samples
-// arrive (the same bits for the same order). Memory: the two coefficient
-// grids, whatever the number of samples.
+// per channel and denominator sum_i w_i phi_i,n, each coefficient's terms
+// added in the order the samples arrive (the same bits for the same order,
+// at any thread count: the threads split the coefficient rows, not the
+// samples). Memory: the sums, channels + 1 values a coefficient, whatever
+// the number of samples.
 class ScatteredAcquisition {
  public:
-  ScatteredAcquisition(const ScatteredTarget& target, int channels);
+  ScatteredAcquisition(const ScatteredTarget& target, int channels, int threads = 1);
   // Samples [0, count) of `samples`; throws std::invalid_argument (naming the
   // sample) for counts that do not match, a position outside the frame or
-  // non-finite, a weight not finite and > 0, a non-finite value.
+  // non-finite, a weight not finite and > 0, a non-finite value; then the
+  // sums are as before the call.
   void add(const ScatteredSamples& samples);
   // The coefficients of the rule (NormalisedSum or PlainSum; the
   // conventional methods' average for Method::Conventional), prefiltered
   // where min-error. Throws when a coefficient's weight sum is not > 0
   // (no sample in its support) for the normalised rules.
   Coefficients finish(ScatteredRule rule) const;
-  const Grid<double>& numerator() const { return num_; }
-  const Grid<double>& denominator() const { return den_; }
+  Grid<double> numerator() const;    // channels values a coefficient
+  Grid<double> denominator() const;  // one
   std::size_t bytes() const;
 
  private:
   ScatteredTarget target_;
   int channels_;
-  Grid<double> num_, den_;
+  int threads_;
+  Grid<double> sums_;  // per coefficient: the numerator's channels, then the denominator
 };
 
 // The whole projection of the samples (the rule per options; Conventional
@@ -115,6 +122,7 @@ Coefficients project_scattered(const ScatteredSamples& samples, const ScatteredT
 
 // f_app of the target's space at every sample (channel fastest): what the
 // fit's residual is measured with.
-std::vector<double> evaluate_at_samples(const Coefficients& k, const ScatteredSamples& samples);
+std::vector<double> evaluate_at_samples(const Coefficients& k, const ScatteredSamples& samples,
+                                        int threads = 1);
 
 }  // namespace sis
