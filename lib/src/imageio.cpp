@@ -40,6 +40,13 @@
 
 namespace sis {
 
+std::string metadata_number(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
 namespace fs = std::filesystem;
 using OIIO::ImageInput;
 using OIIO::ImageOutput;
@@ -1432,12 +1439,7 @@ StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
                       "their metadata and signed float coefficients");
   Image grid(k.c.width, k.c.height, k.c.channels);
   for (std::size_t q = 0; q < grid.data.size(); ++q) grid.data[q] = static_cast<float>(k.c.data[q]);
-  auto num = [](double v) {
-    std::ostringstream s;
-    s.precision(17);
-    s << v;
-    return s.str();
-  };
+  const auto num = metadata_number;
   // the space's own keys (lattice, storage, origin, matrix, generator, degree)
   Metadata md = visit_space(k, [&](auto space) { return space.metadata(k); });
   md.insert(md.begin(), {"sis:coefficients", "1"});

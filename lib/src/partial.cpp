@@ -22,12 +22,7 @@ using OIIO::TypeDesc;
 
 namespace {
 
-std::string number(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
+const auto number = metadata_number;
 std::string size_of(long w, long h) { return std::to_string(w) + "x" + std::to_string(h); }
 std::string joined(const std::vector<std::string>& v) {
   std::string s;

@@ -38,12 +38,7 @@ std::string space_name(const Space& space) {
 }
 
 namespace {
-std::string number(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
+const auto number = metadata_number;
 
 Metadata lattice_metadata(const Coefficients& k, const char* lattice, const char* storage) {
   const Vec2 o = k.lattice.origin();

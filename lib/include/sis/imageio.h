@@ -28,6 +28,8 @@ struct OutputError : std::runtime_error {
 };
 
 using Metadata = std::vector<std::pair<std::string, std::string>>;
+// A number as a metadata value: 17 significant digits, which read back exactly.
+std::string metadata_number(double v);
 
 // Sample types of image files: integers (written sRGB-encoded, clamped to
 // [0, 1]) and floats (linear), as oiiotool's -d spells them.
