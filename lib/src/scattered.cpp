@@ -859,11 +859,13 @@ void ScatteredAcquisition::add(const ScatteredSamples& s) {
   const Geometry g = geometry(target_);
   // Several threads: the plan of their rows checks every sample first. One:
   // each block is checked as it is added, while it is in the cache.
+  // A bad sample leaves the acquisition refusing more, however many
+  // threads (and so whether part of the call was added).
+  failed_ = true;
   const RowPlan plan = plan_rows(s, g, reach(target_.generator), threads_, &target_);
-  if (!splat(s, target_, g, plan, s.values.data(), channels_, sums_, threads_, plan.parts() == 1)) {
-    failed_ = true;
+  if (!splat(s, target_, g, plan, s.values.data(), channels_, sums_, threads_, plan.parts() == 1))
     name_bad_sample(s, target_);
-  }
+  failed_ = false;
 }
 
 Coefficients ScatteredAcquisition::finish(ScatteredRule rule) const {
