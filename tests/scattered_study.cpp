@@ -1,15 +1,19 @@
 // The scattered-samples study (docs/design.md section 11): min-error cubic
 // at 256^2 of the zone plate (closed form, K = 0.7 pi 256), jittered samples
 // at 4 and 16 rays per pixel, continuous L2 error against the closed form;
-// time per sample of the normalised pass against the grid acquisition
-// (medians of 5, one thread). Usage: scattered_study
+// time per sample of the normalised pass (its checks included) against the
+// grid acquisition of the same rays on a regular grid, on one thread and on
+// all of them, medians of `runs` in this process; the fit's passes, time and
+// memory. Usage: scattered_study [runs (default 7)]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <cstdlib>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include "sis/metrics.h"
@@ -18,18 +22,22 @@
 
 using namespace sis;
 
+static int runs = 7;
+
 static double seconds(const std::function<void()>& f) {
   std::vector<double> t;
-  for (int r = 0; r < 5; ++r) {
+  for (int r = 0; r < runs; ++r) {
     const auto a = std::chrono::steady_clock::now();
     f();
     t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
   }
   std::sort(t.begin(), t.end());
-  return t[2];
+  return t[t.size() / 2];
 }
 
-int main() {
+int main(int argc, char** argv) {
+  if (argc > 1) runs = std::max(1, std::atoi(argv[1]));
+  const int all = std::max(1, int(std::thread::hardware_concurrency()));
   const long W = 256, H = 256;
   const double K = 0.7 * M_PI * 256;
   ScatteredTarget target;
@@ -58,25 +66,35 @@ int main() {
       std::printf("%d rays/px  jittered %-12s  L2 %.5f\n", s * s, scattered_rule_name(rule),
                   zoneplate_l2_error(project_scattered(smp, target, o), K, 8));
     }
-    for (int it : {1, 2, 5, 10, 20}) {
-      ScatteredOptions o;
-      o.rule = ScatteredRule::LeastSquares;
-      o.iterations = it;
-      ScatteredReport rep;
-      Coefficients k;
-      const double t = seconds([&] { k = project_scattered(smp, target, o, &rep); });
-      std::printf("%d rays/px  jittered fit %2d it     L2 %.5f  passes %ld  %.3f s  %.1f MB\n", s * s,
-                  rep.iterations, zoneplate_l2_error(k, K, 8), rep.passes, t, rep.bytes / 1e6);
-    }
+    for (int it : {1, 2, 5, 10, 20})
+      for (int threads : {1, all}) {
+        if (threads == all && it != 5 && all > 1) continue;
+        ScatteredOptions o;
+        o.rule = ScatteredRule::LeastSquares;
+        o.iterations = it;
+        o.threads = threads;
+        ScatteredReport rep;
+        Coefficients k;
+        const double t = seconds([&] { k = project_scattered(smp, target, o, &rep); });
+        std::printf("%d rays/px  jittered fit %2d it     L2 %.5f  passes %ld  %.3f s  %.1f MB  (%d thread%s)\n",
+                    s * s, rep.iterations, zoneplate_l2_error(k, K, 8), rep.passes, t, rep.bytes / 1e6,
+                    threads, threads > 1 ? "s" : "");
+        if (all == 1) break;
+      }
     const double n = double(W * s) * H * s;
-    const double t_scat = seconds([&] {
-      ScatteredAcquisition a(target, 1);
-      a.add(smp);
-    });
     AcquisitionPlan plan(W * s, H * s, 1, W, H, Lattice::cartesian(), Kernel::bspline(3),
                          Boundary::Mirror, Method::MinError);
-    const double t_grid = seconds([&] { acquire(grid, plan, 1); });
-    std::printf("%d rays/px  time per sample: normalised pass %.1f ns (checks included), grid acquisition %.1f ns, ratio %.2f\n",
-                s * s, 1e9 * t_scat / n, 1e9 * t_grid / n, t_scat / t_grid);
+    for (int threads : {1, all}) {
+      const double t_scat = seconds([&] {
+        ScatteredAcquisition a(target, 1, threads);
+        a.add(smp);
+      });
+      const double t_grid = seconds([&] { acquire(grid, plan, threads); });
+      std::printf("%d rays/px  %d thread%s  time per sample: normalised pass %.2f ns (checks included), "
+                  "grid acquisition %.2f ns, ratio %.2f\n",
+                  s * s, threads, threads > 1 ? "s" : "", 1e9 * t_scat / n, 1e9 * t_grid / n,
+                  t_scat / t_grid);
+      if (all == 1) break;
+    }
   }
 }

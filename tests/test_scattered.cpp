@@ -3,6 +3,7 @@
 // of the fit's normal equations, and the grid acquisition.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -164,6 +165,40 @@ TEST(Scattered, NormalisedSumEqualsDirectDoubleSums) {
       // evaluation of phi (closed forms against bspline()), then the same
       // prefilter, whose gain is at most 1/A_3(pi)^2 = 342 in 2-D.
       EXPECT_LT(max_abs_diff(got.c, want.c), 1e-12) << name(cs) << (weighted ? " weighted" : "");
+    }
+  }
+}
+
+// The passes' other tap rules (Cox-de Boor above degree 3, the kernel's own
+// values for the conventional Gaussian and Lanczos) and widths of 4 + 1 and
+// 6 + 1 values a coefficient (the vector path's widest and the general one).
+TEST(Scattered, OtherTapRulesAndWidthsEqualDirectDoubleSums) {
+  for (Boundary b : {Boundary::Mirror, Boundary::Periodic}) {
+    for (int channels : {1, 4, 6}) {
+      const ScatteredTarget t = target(8, 7, 5, b);
+      const ScatteredSamples s = random_samples(700, channels, 8, 7, 31 + channels, true);
+      // The degree-5 prefilter's gain is 1/A_5(pi)^2 ~ 1.5e4 in 2-D: the
+      // sums' rounding (1e-16 each) reaches a few 1e-12 after it.
+      EXPECT_LT(max_abs_diff(project_scattered(s, t, normalised()).c, normalised_reference(s, t).c),
+                1e-10)
+          << boundary_name(b) << ' ' << channels << " channels";
+    }
+    for (const Kernel& k : {Kernel::gaussian(), Kernel::lanczos(3)}) {
+      ScatteredTarget t = target(6, 4, 3, b);
+      t.generator = k;
+      t.method = Method::Conventional;
+      const ScatteredSamples s = random_samples(400, 2, 6, 4, 13);
+      const auto Phi = design(s, t);
+      const Coefficients got = project_scattered(s, t, normalised());
+      for (long n = 0; n < 24; ++n)
+        for (int c = 0; c < 2; ++c) {
+          double num = 0, den = 0;
+          for (long i = 0; i < s.count(); ++i) {
+            num += Phi[i][n] * s.values[i * 2 + c];
+            den += Phi[i][n];
+          }
+          EXPECT_NEAR(got.c.at(n % 6, n / 6, c), num / den, 1e-13) << k.name() << ' ' << boundary_name(b);
+        }
     }
   }
 }
@@ -360,6 +395,46 @@ TEST(Scattered, ConvergesToTheGridProjectionAsDensityGrows) {
   }
 }
 
+// The threads split the coefficient rows, each coefficient's terms in the
+// samples' order: the same bits for any count, jittered samples in rows (so
+// that the blocks of samples reach different rows) and shuffled ones, every
+// rule, three channels and one.
+TEST(Scattered, SameBitsForAnyThreadCount) {
+  ScatteredSamples rows = jittered(64, 48, 3, 5);
+  ScatteredSamples shuffled = rows;
+  std::mt19937_64 g(3);
+  for (long i = shuffled.count() - 1; i > 0; --i) {
+    const long j = long(g() % std::uint64_t(i + 1));
+    std::swap(shuffled.positions[2 * i], shuffled.positions[2 * j]);
+    std::swap(shuffled.positions[2 * i + 1], shuffled.positions[2 * j + 1]);
+    std::swap(shuffled.values[i], shuffled.values[j]);
+  }
+  ScatteredSamples colour = rows;
+  colour.channels = 3;
+  colour.values.clear();
+  for (long i = 0; i < rows.count(); ++i)
+    for (int c = 0; c < 3; ++c) colour.values.push_back(rows.values[i] + 0.1 * c);
+  for (const ScatteredSamples* s : {&rows, &shuffled, &colour})
+    for (Boundary b : {Boundary::Mirror, Boundary::Periodic})
+      for (ScatteredRule rule :
+           {ScatteredRule::NormalisedSum, ScatteredRule::PlainSum, ScatteredRule::LeastSquares}) {
+        const ScatteredTarget t = target(64, 48, 3, b);
+        ScatteredOptions o;
+        o.rule = rule;
+        o.threads = 1;
+        const Coefficients one = project_scattered(*s, t, o);
+        const std::vector<double> at_one = evaluate_at_samples(one, *s, 1);
+        for (int threads : {2, 3, 7}) {
+          o.threads = threads;
+          const Coefficients k = project_scattered(*s, t, o);
+          ASSERT_EQ(k.c.data.size(), one.c.data.size());
+          EXPECT_TRUE(std::equal(k.c.data.begin(), k.c.data.end(), one.c.data.begin()))
+              << scattered_rule_name(rule) << ' ' << boundary_name(b) << ' ' << threads << " threads";
+          EXPECT_EQ(evaluate_at_samples(one, *s, threads), at_one) << threads << " threads";
+        }
+      }
+}
+
 void expect_error(const std::function<void()>& f, const std::string& part) {
   try {
     f();
@@ -409,6 +484,22 @@ TEST(Scattered, BadInputIsRefusedWithAClearMessage) {
   mitchell.generator = Kernel::mitchell();
   expect_error([&] { project_scattered(good, mitchell); }, "min-error needs a B-spline");
   expect_error([] { parse_scattered_rule("exact"); }, "unknown scattered rule 'exact'");
+  // A bad sample past the first blocks: named as in one pass; the
+  // acquisition, holding part of the call, refuses more.
+  for (int threads : {1, 2}) {
+    const ScatteredTarget big = target(64, 48, 3, Boundary::Mirror);
+    ScatteredSamples late = jittered(64, 48, 2, 9);
+    late.values[10000] = NAN;
+    ScatteredAcquisition acq(big, 1, threads);
+    expect_error([&] { acq.add(late); }, "sample 10000 has a non-finite value in channel 0");
+    EXPECT_THROW(acq.finish(ScatteredRule::NormalisedSum), std::logic_error) << threads;
+    EXPECT_THROW(acq.add(jittered(64, 48, 2, 9)), std::logic_error) << threads;
+  }
+  // Counts that do not match leave it as it was.
+  ScatteredAcquisition acq(t, 1);
+  expect_error([&] { acq.add(with([](auto& s) { s.values.pop_back(); })); }, "values hold 99");
+  acq.add(good);
+  EXPECT_NO_THROW(acq.finish(ScatteredRule::NormalisedSum));
 }
 
 }  // namespace

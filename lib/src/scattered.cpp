@@ -4,11 +4,13 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <initializer_list>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 
 #include "sis/parallel.h"
 
@@ -24,78 +26,83 @@ constexpr long kBlock = 4096;
 // The taps of one axis for a sample at lattice coordinate u: a rule returns
 // the first tap's extended index m0 and writes phi(u - m0 - a), a < count(),
 // from the generator's polynomial pieces (K: the count when fixed, else 0).
-struct BoxTaps {
-  static constexpr int K = 1;
-  int count() const { return 1; }
+//
+// Generators of at most 4 taps whose pieces are polynomials: with
+// b = floor(u + half) and t = u - b, tap a (index b - back + a) weighs
+// w_a(t) = sum_p c[p][a] t^p, by Horner's rule; lanes 4..7 of c repeat
+// lanes 0..3, so that one 8-lane evaluation gives both axes' weights.
+template <int KK>
+struct PolyTaps {
+  static constexpr int K = KK;
+  double half = 0;
+  long back = 0;
+  alignas(64) double c[4][8] = {};
+  int count() const { return K; }
+  void set(int p, std::initializer_list<double> v) {
+    int a = 0;
+    for (double x : v) c[p][a] = c[p][a + 4] = x, ++a;
+  }
   long operator()(double u, double* w) const {
-    w[0] = 1.0;
-    return long(std::floor(u + 0.5));
+    const double b = std::floor(u + half), t = u - b;
+    for (int a = 0; a < K; ++a) {
+      double v = c[K - 1][a];
+      for (int p = K - 2; p >= 0; --p) v = v * t + c[p][a];
+      w[a] = v;
+    }
+    return long(b) - back;
   }
 };
 
-struct TentTaps {
-  static constexpr int K = 2;
-  int count() const { return 2; }
-  long operator()(double u, double* w) const {
-    const double b = std::floor(u), f = u - b;
-    w[0] = 1 - f;
-    w[1] = f;
-    return long(b);
-  }
-};
+PolyTaps<1> box_taps() {
+  PolyTaps<1> t;
+  t.half = 0.5;
+  t.set(0, {1.0});
+  return t;
+}
 
-struct QuadraticTaps {
-  static constexpr int K = 3;
-  int count() const { return 3; }
-  long operator()(double u, double* w) const {
-    const double b = std::floor(u + 0.5), g = u - b;
-    w[0] = 0.5 * (0.5 - g) * (0.5 - g);
-    w[1] = 0.75 - g * g;
-    w[2] = 0.5 * (0.5 + g) * (0.5 + g);
-    return long(b) - 1;
-  }
-};
+PolyTaps<2> tent_taps() {  // 1 - t, t
+  PolyTaps<2> t;
+  t.set(0, {1.0, 0.0});
+  t.set(1, {-1.0, 1.0});
+  return t;
+}
 
-struct CubicTaps {
-  static constexpr int K = 4;
-  int count() const { return 4; }
-  long operator()(double u, double* w) const {
-    const double b = std::floor(u), f = u - b, f2 = f * f, f3 = f2 * f, g = 1 - f;
-    w[0] = g * g * g / 6;
-    w[1] = (4 - 6 * f2 + 3 * f3) / 6;
-    w[2] = (1 + 3 * f + 3 * f2 - 3 * f3) / 6;
-    w[3] = f3 / 6;
-    return long(b) - 1;
-  }
-};
+PolyTaps<3> quadratic_taps() {  // (1/2 - t)^2 / 2, 3/4 - t^2, (1/2 + t)^2 / 2, t in [-1/2, 1/2)
+  PolyTaps<3> t;
+  t.half = 0.5;
+  t.back = 1;
+  t.set(0, {0.125, 0.75, 0.125});
+  t.set(1, {-0.5, 0.0, 0.5});
+  t.set(2, {0.5, -1.0, 0.5});
+  return t;
+}
 
-// Mitchell-Netravali: the piece for |x| < 1 at f and 1 - f, the piece for
-// 1 <= |x| < 2 at 1 + f and 2 - f.
-struct MitchellTaps {
-  static constexpr int K = 4;
-  double n3, n2, n0, f3, f2, f1, f0;
-  explicit MitchellTaps(const Kernel& k) {
-    const double B = k.param(0), C = k.param(1);
-    n3 = (12 - 9 * B - 6 * C) / 6;
-    n2 = (-18 + 12 * B + 6 * C) / 6;
-    n0 = (6 - 2 * B) / 6;
-    f3 = (-B - 6 * C) / 6;
-    f2 = (6 * B + 30 * C) / 6;
-    f1 = (-12 * B - 48 * C) / 6;
-    f0 = (8 * B + 24 * C) / 6;
-  }
-  int count() const { return 4; }
-  double near(double t) const { return (n3 * t + n2) * t * t + n0; }
-  double far(double t) const { return ((f3 * t + f2) * t + f1) * t + f0; }
-  long operator()(double u, double* w) const {
-    const double b = std::floor(u), f = u - b;
-    w[0] = far(1 + f);
-    w[1] = near(f);
-    w[2] = near(1 - f);
-    w[3] = far(2 - f);
-    return long(b) - 1;
-  }
-};
+PolyTaps<4> cubic_taps() {  // (1 - t)^3 / 6, (4 - 6 t^2 + 3 t^3) / 6, (1 + 3 t + 3 t^2 - 3 t^3) / 6, t^3 / 6
+  PolyTaps<4> t;
+  t.back = 1;
+  t.set(0, {1.0 / 6, 2.0 / 3, 1.0 / 6, 0.0});
+  t.set(1, {-0.5, 0.0, 0.5, 0.0});
+  t.set(2, {0.5, -1.0, 0.5, 0.0});
+  t.set(3, {-1.0 / 6, 0.5, -0.5, 1.0 / 6});
+  return t;
+}
+
+// Mitchell-Netravali: near(x) = n3 x^3 + n2 x^2 + n0 for |x| < 1 and
+// far(x) = f3 x^3 + f2 x^2 + f1 x + f0 for 1 <= |x| < 2, at the taps'
+// distances 1 + t, t, 1 - t, 2 - t, expanded in t.
+PolyTaps<4> mitchell_taps(const Kernel& k) {
+  const double B = k.param(0), C = k.param(1);
+  const double n3 = (12 - 9 * B - 6 * C) / 6, n2 = (-18 + 12 * B + 6 * C) / 6, n0 = (6 - 2 * B) / 6;
+  const double f3 = (-B - 6 * C) / 6, f2 = (6 * B + 30 * C) / 6, f1 = (-12 * B - 48 * C) / 6,
+               f0 = (8 * B + 24 * C) / 6;
+  PolyTaps<4> t;
+  t.back = 1;
+  t.set(0, {f3 + f2 + f1 + f0, n0, n3 + n2 + n0, 8 * f3 + 4 * f2 + 2 * f1 + f0});
+  t.set(1, {3 * f3 + 2 * f2 + f1, 0.0, -3 * n3 - 2 * n2, -12 * f3 - 4 * f2 - f1});
+  t.set(2, {3 * f3 + f2, n2, 3 * n3 + n2, 6 * f3 + f2});
+  t.set(3, {f3, n3, -n3, -f3});
+  return t;
+}
 
 // A B-spline of any degree d: its d + 1 pieces at the sample by the
 // Cox-de Boor recursion on the integer knots.
@@ -138,14 +145,14 @@ template <typename F>
 void with_taps(const Kernel& k, F&& f) {
   if (k.is_bspline()) {
     switch (k.degree()) {
-      case 0: return f(BoxTaps{});
-      case 1: return f(TentTaps{});
-      case 2: return f(QuadraticTaps{});
-      case 3: return f(CubicTaps{});
+      case 0: return f(box_taps());
+      case 1: return f(tent_taps());
+      case 2: return f(quadratic_taps());
+      case 3: return f(cubic_taps());
       default: return f(BSplineTaps{k.degree()});
     }
   }
-  if (k.kind() == KernelKind::Mitchell) return f(MitchellTaps(k));
+  if (k.kind() == KernelKind::Mitchell) return f(mitchell_taps(k));
   return f(KernelTaps(k));
 }
 
@@ -391,6 +398,230 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) void evaluate_range
   }
 }
 
+// The passes of the polynomial taps (PolyTaps) with A <= 5 values a
+// coefficient, in vectors: both axes' weights in one 8-lane Horner
+// evaluation; the products P[j] = wx[j / A] (w v)[j % A] of a row of taps
+// built in lanes; each of the K rows of the sample's support added as
+// L = K A contiguous values. Lane by lane the same products in the same order
+// as the scalar loops of the folded taps, so the vector width and the path
+// do not change the bits. GCC's vector types lower to whatever width the
+// clone's target has. They never cross a call the inlining leaves (the
+// ABI note -Wpsabi gives for them is moot), and GCC gives it where the
+// templates are instantiated, at the end of the file: off for the file.
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef double v8d __attribute__((vector_size(64)));
+typedef double v4d __attribute__((vector_size(32)));
+typedef double v2d __attribute__((vector_size(16)));
+typedef double v8du __attribute__((vector_size(64), aligned(8)));
+typedef double v4du __attribute__((vector_size(32), aligned(8)));
+typedef double v2du __attribute__((vector_size(16), aligned(8)));
+
+// Lanes [J, J + N) of P, from W (lanes 0..3: wx) and V (lanes 0..A-1: w v).
+template <int A, int J, std::size_t... l>
+inline __attribute__((always_inline)) auto products(const v8d& W, const v8d& V,
+                                                    std::index_sequence<l...>) {
+  return __builtin_shufflevector(W, W, int((J + l) / A)...) *
+         __builtin_shufflevector(V, V, int((J + l) % A)...);
+}
+
+// P[J, L) = products(W, V), 8, 4, 2, then 1 lanes at a time.
+template <int L, int A, int J = 0>
+inline __attribute__((always_inline)) void make_products(double* P, const v8d& W, const v8d& V) {
+  if constexpr (J + 8 <= L) {
+    *reinterpret_cast<v8d*>(P + J) = products<A, J>(W, V, std::make_index_sequence<8>{});
+    make_products<L, A, J + 8>(P, W, V);
+  } else if constexpr (J + 4 <= L) {
+    *reinterpret_cast<v4d*>(P + J) = products<A, J>(W, V, std::make_index_sequence<4>{});
+    make_products<L, A, J + 4>(P, W, V);
+  } else if constexpr (J + 2 <= L) {
+    *reinterpret_cast<v2d*>(P + J) = products<A, J>(W, V, std::make_index_sequence<2>{});
+    make_products<L, A, J + 2>(P, W, V);
+  } else if constexpr (J < L) {
+    P[J] = W[J / A] * V[J % A];
+  }
+}
+
+// row[J, L) += f * P[J, L), in the chunks make_products wrote.
+template <int L, int J = 0>
+inline __attribute__((always_inline)) void add_products(double* row, double f, const double* P) {
+  if constexpr (J + 8 <= L) {
+    v8du* r = reinterpret_cast<v8du*>(row + J);
+    *r = *r + f * *reinterpret_cast<const v8d*>(P + J);
+    add_products<L, J + 8>(row, f, P);
+  } else if constexpr (J + 4 <= L) {
+    v4du* r = reinterpret_cast<v4du*>(row + J);
+    *r = *r + f * *reinterpret_cast<const v4d*>(P + J);
+    add_products<L, J + 4>(row, f, P);
+  } else if constexpr (J + 2 <= L) {
+    v2du* r = reinterpret_cast<v2du*>(row + J);
+    *r = *r + f * *reinterpret_cast<const v2d*>(P + J);
+    add_products<L, J + 2>(row, f, P);
+  } else if constexpr (J < L) {
+    row[J] = row[J] + f * P[J];
+  }
+}
+
+// t[J, L) (=, or += where Add) f * row[J, L), 8, 4, 2, then 1 lanes at a time.
+template <int L, bool Add, int J = 0>
+inline __attribute__((always_inline)) void gather_row(double* t, double f, const double* row) {
+  if constexpr (J + 8 <= L) {
+    v8du* d = reinterpret_cast<v8du*>(t + J);
+    const v8du r = *reinterpret_cast<const v8du*>(row + J);
+    *d = Add ? *d + f * r : f * r;
+    gather_row<L, Add, J + 8>(t, f, row);
+  } else if constexpr (J + 4 <= L) {
+    v4du* d = reinterpret_cast<v4du*>(t + J);
+    const v4du r = *reinterpret_cast<const v4du*>(row + J);
+    *d = Add ? *d + f * r : f * r;
+    gather_row<L, Add, J + 4>(t, f, row);
+  } else if constexpr (J + 2 <= L) {
+    v2du* d = reinterpret_cast<v2du*>(t + J);
+    const v2du r = *reinterpret_cast<const v2du*>(row + J);
+    *d = Add ? *d + f * r : f * r;
+    gather_row<L, Add, J + 2>(t, f, row);
+  } else if constexpr (J < L) {
+    t[J] = Add ? t[J] + f * row[J] : f * row[J];
+  }
+}
+
+// Vectors made in registers (element by element, GCC goes through memory,
+// whose wide loads of narrow stores stall).
+inline __attribute__((always_inline)) v8d broadcast(double a) {
+  return v8d{a, a, a, a, a, a, a, a};
+}
+
+// a in lanes 0..3, b in lanes 4..7.
+inline __attribute__((always_inline)) v8d halves(double a, double b) {
+  const v4d x = {a, a, a, a}, y = {b, b, b, b};
+  return __builtin_shufflevector(x, y, 0, 1, 2, 3, 4, 5, 6, 7);
+}
+
+// Lanes 0..A-1: w v_c for c < C = A - Den, then w where Den (lanes from A
+// on unused), from vectors of 4 lanes.
+template <int A, bool Den>
+inline __attribute__((always_inline)) v8d weighted_values(double w, const double* v) {
+  constexpr int C = A - int(Den);
+  auto x = [&](int c) { return c < C ? w * v[c] : w; };
+  if constexpr (A == 1) {
+    return broadcast(x(0));
+  } else if constexpr (A == 2) {
+    const double a = x(0), b = x(1);
+    const v4d X = {a, b, a, b};
+    return __builtin_shufflevector(X, X, 0, 1, 2, 3, 0, 1, 2, 3);
+  } else if constexpr (A == 3) {
+    const double a = x(0), b = x(1), c = x(2);
+    const v4d X = {a, b, c, c};
+    return __builtin_shufflevector(X, X, 0, 1, 2, 3, 0, 1, 2, 3);
+  } else if constexpr (A == 4) {
+    const v4d X = {x(0), x(1), x(2), x(3)};
+    return __builtin_shufflevector(X, X, 0, 1, 2, 3, 0, 1, 2, 3);
+  } else {
+    static_assert(A == 5);
+    const double e = x(4);
+    const v4d X = {x(0), x(1), x(2), x(3)}, Y = {e, e, e, e};
+    return __builtin_shufflevector(X, Y, 0, 1, 2, 3, 4, 5, 6, 7);
+  }
+}
+
+// Both axes' weights: lanes 0..K-1 wx, 4..4+K-1 wy; m0 of each axis.
+template <int K>
+inline __attribute__((always_inline)) v8d poly_weights(const PolyTaps<K>& taps, double u, double v,
+                                                       long& mx, long& my) {
+  const double bu = std::floor(u + taps.half), bv = std::floor(v + taps.half);
+  mx = long(bu) - taps.back;
+  my = long(bv) - taps.back;
+  const v8d t = halves(u - bu, v - bv);
+  v8d W = *reinterpret_cast<const v8d*>(taps.c[K - 1]);
+  for (int p = K - 2; p >= 0; --p) W = W * t + *reinterpret_cast<const v8d*>(taps.c[p]);
+  return W;
+}
+
+template <int K, int A, bool Den>
+__attribute__((target_clones("avx512f", "avx2", "default"))) void splat_poly(
+    const PolyTaps<K>& taps, const Axes& g, const Batch& s, double* acc, long i0, long i1, long r0,
+    long r1) {
+  constexpr int L = K * A, C = A - int(Den);
+  const long nx = g.nx, ny = g.ny;
+  const std::size_t stride = std::size_t(nx) * A;
+  alignas(64) double w8[8], v8[8], P[L];
+  long ix[K];
+  for (long i = i0; i < i1; ++i) {
+    long mx, my;
+    const v8d W = poly_weights(taps, (s.pos[2 * i] - g.ox) * g.sx, (s.pos[2 * i + 1] - g.oy) * g.sy,
+                               mx, my);
+    const bool inside_y = my >= 0 && my + K <= ny;
+    if (inside_y && (my + K <= r0 || my >= r1)) continue;
+    const double w = s.weight(i);
+    const double* val = s.val + std::size_t(i) * C;
+    const v8d V = weighted_values<A, Den>(w, val);
+    if (inside_y && mx >= 0 && mx + K <= nx) {
+      make_products<L, A>(P, W, V);
+      double* base = acc + std::size_t(my) * stride + std::size_t(mx) * A;
+      if (my >= r0 && my + K <= r1) {
+        for (int b = 0; b < K; ++b) add_products<L>(base + std::size_t(b) * stride, W[4 + b], P);
+      } else {
+        for (int b = 0; b < K; ++b)
+          if (my + b >= r0 && my + b < r1)
+            add_products<L>(base + std::size_t(b) * stride, W[4 + b], P);
+      }
+    } else {
+      *reinterpret_cast<v8d*>(w8) = W;
+      *reinterpret_cast<v8d*>(v8) = V;
+      for (int a = 0; a < K; ++a) ix[a] = extend_index(mx + a, nx, g.boundary) * A;
+      for (int b = 0; b < K; ++b) {
+        const long r = extend_index(my + b, ny, g.boundary);
+        if (r < r0 || r >= r1) continue;
+        double* row = acc + std::size_t(r) * stride;
+        const double f = w8[4 + b];
+        for (int a = 0; a < K; ++a)
+          for (int c = 0; c < A; ++c) row[ix[a] + c] = row[ix[a] + c] + f * (w8[a] * v8[c]);
+      }
+    }
+  }
+}
+
+template <int K, int C>
+__attribute__((target_clones("avx512f", "avx2", "default"))) void evaluate_poly(
+    const PolyTaps<K>& taps, const Axes& g, const Batch& s, const double* coef, double* out,
+    long i0, long i1) {
+  constexpr int L = K * C;
+  const long nx = g.nx, ny = g.ny;
+  const std::size_t stride = std::size_t(nx) * C;
+  alignas(64) double w8[8], T[L];
+  long ix[K];
+  for (long i = i0; i < i1; ++i) {
+    long mx, my;
+    const v8d W = poly_weights(taps, (s.pos[2 * i] - g.ox) * g.sx, (s.pos[2 * i + 1] - g.oy) * g.sy,
+                               mx, my);
+    *reinterpret_cast<v8d*>(w8) = W;
+    if (my >= 0 && my + K <= ny && mx >= 0 && mx + K <= nx) {
+      const double* base = coef + std::size_t(my) * stride + std::size_t(mx) * C;
+      gather_row<L, false>(T, W[4], base);
+      for (int b = 1; b < K; ++b) gather_row<L, true>(T, W[4 + b], base + std::size_t(b) * stride);
+    } else {
+      for (int a = 0; a < K; ++a) ix[a] = extend_index(mx + a, nx, g.boundary) * C;
+      for (int b = 0; b < K; ++b) {
+        const double* row = coef + std::size_t(extend_index(my + b, ny, g.boundary)) * stride;
+        const double f = w8[4 + b];
+        for (int a = 0; a < K; ++a)
+          for (int c = 0; c < C; ++c)
+            T[a * C + c] = b == 0 ? f * row[ix[a] + c] : T[a * C + c] + f * row[ix[a] + c];
+      }
+    }
+    double* o = out + std::size_t(i) * C;
+    for (int c = 0; c < C; ++c) {
+      double v = w8[0] * T[c];
+      for (int a = 1; a < K; ++a) v = v + w8[a] * T[a * C + c];
+      o[c] = v;
+    }
+  }
+}
+
+template <typename T>
+struct is_poly : std::false_type {};
+template <int K>
+struct is_poly<PolyTaps<K>> : std::true_type {};
+
 // Calls f(std::integral_constant<int, A>) for A in 1..5, or with 0 for any
 // other A.
 template <typename F>
@@ -422,7 +653,10 @@ struct RowPlan {
 // side, at most.
 int reach(const Kernel& k) { return int(std::floor(2 * k.radius())) + 1; }
 
-RowPlan plan_rows(const ScatteredSamples& s, const Geometry& g, int K, int threads) {
+// Where `check` is given, the samples are checked in the same pass, and a
+// bad one is named (std::invalid_argument) before any is added.
+RowPlan plan_rows(const ScatteredSamples& s, const Geometry& g, int K, int threads,
+                  const ScatteredTarget* check = nullptr) {
   RowPlan p;
   const long n = s.count(), blocks = (n + kBlock - 1) / kBlock;
   const long parts = std::min<long>(threads, g.ny);
@@ -433,8 +667,16 @@ RowPlan plan_rows(const ScatteredSamples& s, const Geometry& g, int K, int threa
   }
   p.rows.resize(blocks);
   const double sy = 1.0 / g.hy;
+  std::vector<char> good(blocks, 1);
   parallel_for(blocks, threads, [&](long b0, long b1) {
     for (long b = b0; b < b1; ++b) {
+      if (check && !samples_good(s.positions.data(), s.values.data(),
+                                 s.weights.empty() ? nullptr : s.weights.data(), s.channels,
+                                 b * kBlock, std::min(n, (b + 1) * kBlock), check->width,
+                                 check->height)) {
+        good[b] = 0;
+        continue;
+      }
       double lo = INFINITY, hi = -INFINITY;
       for (long i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
         const double v = s.positions[2 * i + 1];
@@ -446,6 +688,7 @@ RowPlan plan_rows(const ScatteredSamples& s, const Geometry& g, int K, int threa
       p.rows[b] = {r0, r1};
     }
   });
+  if (std::find(good.begin(), good.end(), 0) != good.end()) name_bad_sample(s, *check);
   std::vector<double> density(g.ny + 1, 0.0);
   for (long b = 0; b < blocks; ++b) {
     const long count = std::min(n, (b + 1) * kBlock) - b * kBlock;
@@ -469,8 +712,13 @@ RowPlan plan_rows(const ScatteredSamples& s, const Geometry& g, int K, int threa
 
 // acc += the splat of values (`width` each) at the samples, with the weight
 // sums in the same pass where acc holds width + 1 values a coefficient.
-void splat(const ScatteredSamples& s, const ScatteredTarget& t, const Geometry& g,
-           const RowPlan& plan, const double* values, int width, Grid<double>& acc, int threads) {
+// Where `check`, each block of samples is checked before it is added (one
+// thread: the plan has not checked them): returns false at the first bad
+// block, the blocks before it added.
+bool splat(const ScatteredSamples& s, const ScatteredTarget& t, const Geometry& g,
+           const RowPlan& plan, const double* values, int width, Grid<double>& acc, int threads,
+           bool check = false) {
+  bool good = true;
   const Batch bt = batch(s, t, values, width);
   const Axes ax = axes(g, t.boundary);
   const int A = acc.channels;
@@ -486,9 +734,22 @@ void splat(const ScatteredSamples& s, const ScatteredTarget& t, const Geometry& 
           if (r0 == r1) continue;
           for (long b = 0; b < long(plan.rows.size()); ++b) {
             if (plan.rows[b].second < r0 || plan.rows[b].first >= r1) continue;
-            splat_range<std::decay_t<decltype(taps)>, AA>(taps, ax, bt, A, acc.data.data(),
-                                                          b * kBlock, std::min(n, (b + 1) * kBlock),
-                                                          r0, r1, scratch.data());
+            const long i0 = b * kBlock, i1 = std::min(n, (b + 1) * kBlock);
+            if (check && !samples_good(s.positions.data(), s.values.data(),
+                                       s.weights.empty() ? nullptr : s.weights.data(), s.channels,
+                                       i0, i1, t.width, t.height)) {
+              good = false;
+              return;
+            }
+            using Taps = std::decay_t<decltype(taps)>;
+            if constexpr (is_poly<Taps>::value && AA > 0) {
+              if (A == width + 1)
+                splat_poly<Taps::K, AA, true>(taps, ax, bt, acc.data.data(), i0, i1, r0, r1);
+              else
+                splat_poly<Taps::K, AA, false>(taps, ax, bt, acc.data.data(), i0, i1, r0, r1);
+            } else
+              splat_range<Taps, AA>(taps, ax, bt, A, acc.data.data(), i0, i1, r0, r1,
+                                    scratch.data());
           }
         }
       };
@@ -498,6 +759,7 @@ void splat(const ScatteredSamples& s, const ScatteredTarget& t, const Geometry& 
         parallel_for(plan.parts(), threads, run);
     });
   });
+  return good;
 }
 
 // f_app at every sample, channel fastest.
@@ -513,9 +775,12 @@ void evaluate(const ScatteredSamples& s, const ScatteredTarget& t, const Geometr
       constexpr int CC = decltype(cc)::value;
       parallel_for(blocks, threads, [&](long b0, long b1) {
         std::vector<double> scratch(std::size_t(K) * C);
-        evaluate_range<std::decay_t<decltype(taps)>, CC>(taps, ax, bt, C, c.data.data(), out,
-                                                          b0 * kBlock, std::min(n, b1 * kBlock),
-                                                          scratch.data());
+        const long i0 = b0 * kBlock, i1 = std::min(n, b1 * kBlock);
+        using Taps = std::decay_t<decltype(taps)>;
+        if constexpr (is_poly<Taps>::value && CC > 0)
+          evaluate_poly<Taps::K, CC>(taps, ax, bt, c.data.data(), out, i0, i1);
+        else
+          evaluate_range<Taps, CC>(taps, ax, bt, C, c.data.data(), out, i0, i1, scratch.data());
       });
     });
   });
@@ -587,13 +852,26 @@ Grid<double> ScatteredAcquisition::denominator() const {
 }
 
 void ScatteredAcquisition::add(const ScatteredSamples& s) {
-  check(s, target_, channels_, threads_);
+  if (failed_)
+    throw std::logic_error(
+        "scattered acquisition: an earlier add() met a bad sample; its sums hold part of that call");
+  check_counts(s, channels_);
   const Geometry g = geometry(target_);
-  const RowPlan plan = plan_rows(s, g, reach(target_.generator), threads_);
-  splat(s, target_, g, plan, s.values.data(), channels_, sums_, threads_);
+  // Several threads: the plan of their rows checks every sample first. One:
+  // each block is checked as it is added, while it is in the cache.
+  // A bad sample leaves the acquisition refusing more, however many
+  // threads (and so whether part of the call was added).
+  failed_ = true;
+  const RowPlan plan = plan_rows(s, g, reach(target_.generator), threads_, &target_);
+  if (!splat(s, target_, g, plan, s.values.data(), channels_, sums_, threads_, plan.parts() == 1))
+    name_bad_sample(s, target_);
+  failed_ = false;
 }
 
 Coefficients ScatteredAcquisition::finish(ScatteredRule rule) const {
+  if (failed_)
+    throw std::logic_error(
+        "scattered acquisition: an earlier add() met a bad sample; its sums hold part of that call");
   if (rule == ScatteredRule::LeastSquares)
     throw std::invalid_argument(
         "scattered acquisition: the least-squares fit needs every sample again "

@@ -95,8 +95,10 @@ class ScatteredAcquisition {
   ScatteredAcquisition(const ScatteredTarget& target, int channels, int threads = 1);
   // Samples [0, count) of `samples`; throws std::invalid_argument (naming the
   // sample) for counts that do not match, a position outside the frame or
-  // non-finite, a weight not finite and > 0, a non-finite value; then the
-  // sums are as before the call.
+  // non-finite, a weight not finite and > 0, a non-finite value. Counts
+  // that do not match leave the sums as they were; after a bad sample (the
+  // samples are checked block by block as they are added, so part of the
+  // call may be in the sums) add() and finish() refuse (std::logic_error).
   void add(const ScatteredSamples& samples);
   // The coefficients of the rule (NormalisedSum or PlainSum; the
   // conventional methods' average for Method::Conventional), prefiltered
@@ -111,6 +113,7 @@ class ScatteredAcquisition {
   ScatteredTarget target_;
   int channels_;
   int threads_;
+  bool failed_ = false;
   Grid<double> sums_;  // per coefficient: the numerator's channels, then the denominator
 };
 
