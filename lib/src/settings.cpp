@@ -225,7 +225,7 @@ void refuse_scattered_options(const Settings& o, const std::string& label) {
     throw RequestError(std::string(o.rule_given ? "--rule" : "--iterations") +
                        " applies to scattered samples (a file with position channels " +
                        kPositionChannelX + ", " + kPositionChannelY + ", or positions= in Python); " +
-                       label + " is not");
+                       label + " is a grid of samples");
 }
 
 Partial form_partial(const Settings& o, const Resolved& r, InputSet set, const FormRequest& fr) {
@@ -384,20 +384,20 @@ Formed form_scattered(const Settings& o, const Resolved& r, ScatteredInput in, c
   const std::string& label = in.label;
   if (o.factor || o.scale)
     throw RequestError(std::string(o.factor ? "--factor" : "--scale") + ": " + label +
-                       " holds scattered samples, no grid to divide or scale; give the frame with "
+                       ": scattered samples have no grid to divide or scale; give the frame with "
                        "--size WxH (output pixels, the positions' coordinates)");
   if (!r.size.given() || !r.size.width || !r.size.height)
     throw RequestError((o.size.empty() ? std::string("--size") : "--size " + o.size) + ": " + label +
-                       " holds scattered samples: give the frame as --size WxH in pixels (the "
+                       ": scattered samples need the frame as --size WxH in pixels (the "
                        "positions' coordinates; no side from an aspect or a percentage)");
   if (space_name(r.space) != "cartesian")
     throw RequestError("--lattice " + o.lattice + ": " + label +
-                       " holds scattered samples, projected onto the Cartesian lattice only (no "
+                       ": scattered samples are projected onto the Cartesian lattice only (no "
                        "scattered rule on the hexagonal lattice yet)");
   if (r.clamp == Clamp::Local)
     throw RequestError("--clamp local: " + label +
-                       " holds scattered samples; the local range is of a grid's samples under "
-                       "each pixel (--clamp zero or none)");
+                       ": scattered samples have no local range (the range of a grid's samples "
+                       "under each pixel); --clamp zero or none");
   if (r.method == Method::Conventional && r.scattered.rule != ScatteredRule::NormalisedSum)
     throw RequestError(std::string("--rule ") + scattered_rule_name(r.scattered.rule) +
                        ": the conventional method takes the normalised weighted average (--rule "

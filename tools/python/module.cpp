@@ -24,6 +24,8 @@
 #include "sis/engine.h"
 #include "sis/metrics.h"
 #include "sis/parallel.h"
+#include "sis/partial.h"
+#include "sis/scattered_input.h"
 #include "sis/settings.h"
 #include "sis/space.h"
 #include "sis/staged_file.h"
@@ -153,6 +155,34 @@ struct PyCoefficients {
   bool highlight_compressed = false;
   bool input_half = false;
   int threads = 1;
+  std::optional<ScatteredReport> report;  // of scattered samples
+  ScatteredRule rule = ScatteredRule::LeastSquares;
+};
+
+// The sample type of a C-contiguous array the wrapper made so (float32,
+// float16, uint8, uint16).
+SampleType array_type(const py::array& array, const char* what) {
+  const char kind = array.dtype().kind();
+  const auto size = array.itemsize();
+  const std::optional<SampleType> type =
+      kind == 'f' && size == 4   ? std::optional(SampleType::Float)
+      : kind == 'f' && size == 2 ? std::optional(SampleType::Half)
+      : kind == 'u' && size == 1 ? std::optional(SampleType::UInt8)
+      : kind == 'u' && size == 2 ? std::optional(SampleType::UInt16)
+                                 : std::nullopt;
+  if (!(array.flags() & py::array::c_style) || !type)
+    throw std::logic_error(std::string(what) + ": the array is not C-contiguous float32, float16, "
+                           "uint8 or uint16");
+  return *type;
+}
+
+// Positions with values (and weights) as the wrapper checked them: values
+// (N, C) of array_type()'s types, positions (N, 2) and weights (N,) float64
+// C-contiguous.
+struct ScatteredArrays {
+  py::array values;
+  py::array_t<double, py::array::c_style> positions;
+  std::optional<py::array_t<double, py::array::c_style>> weights;
 };
 
 int resolved_threads(int threads) {
@@ -164,33 +194,33 @@ int resolved_threads(int threads) {
 // Runs form() on a path or an array (float32 or float16, C-contiguous,
 // (H, W, C): the caller's wrapper makes it so), the GIL released.
 // Returns (image or None, coefficients or None, warnings).
-py::tuple run_form(py::object input, const Settings& s, bool coefficients_only) {
+py::tuple run_form(py::object input, const Settings& s, bool coefficients_only,
+                   const std::optional<ScatteredArrays>& scattered) {
   const bool is_array = py::isinstance<py::array>(input);
   std::vector<ProjectionInput> inputs;
   py::array array;
   std::string path;
-  if (is_array) {
+  if (scattered) {
+    if (scattered->values.ndim() != 2 || scattered->positions.ndim() != 2 ||
+        scattered->positions.shape(1) != 2 || scattered->positions.shape(0) != scattered->values.shape(0) ||
+        (scattered->weights && scattered->weights->size() != scattered->values.shape(0)))
+      throw std::logic_error("run_form(): scattered arrays of the wrong shapes");
+    array_type(scattered->values, "run_form()");
+    channel_count(scattered->values.shape(1), "values");
+  } else if (is_array) {
     array = py::reinterpret_borrow<py::array>(input);
-    const char kind = array.dtype().kind();
-    const auto size = array.itemsize();
-    const std::optional<SampleType> type =
-        kind == 'f' && size == 4   ? std::optional(SampleType::Float)
-        : kind == 'f' && size == 2 ? std::optional(SampleType::Half)
-        : kind == 'u' && size == 1 ? std::optional(SampleType::UInt8)
-        : kind == 'u' && size == 2 ? std::optional(SampleType::UInt16)
-                                   : std::nullopt;
-    if (array.ndim() != 3 || !(array.flags() & py::array::c_style) || !type)
-      throw std::logic_error("run_form(): the array is not C-contiguous float32, float16, uint8 or "
-                             "uint16 (H, W, C)");
+    const SampleType type = array_type(array, "run_form()");
+    if (array.ndim() != 3)
+      throw std::logic_error("run_form(): the array is not (H, W, C)");
     inputs.push_back(ProjectionInput::memory(
         SampleView(array.data(), long(array.shape(1)), long(array.shape(0)),
-                   channel_count(array.shape(2), "array"), *type),
+                   channel_count(array.shape(2), "array"), type),
         "array"));
   } else {
     path = py::str(input);
     inputs.push_back(ProjectionInput::file(path));
   }
-  return translated(is_array, [&] {
+  return translated(is_array || scattered, [&] {
     const Resolved r = resolve(s);
     FormRequest fr;
     fr.keep_coefficients = coefficients_only;
@@ -198,9 +228,23 @@ py::tuple run_form(py::object input, const Settings& s, bool coefficients_only) 
     SignalPoll signals;
     fr.interrupt = signals.hook();
     Formed f;
+    SampleView values;
+    const double *positions = nullptr, *weights = nullptr;
+    if (scattered) {
+      const py::array& v = scattered->values;
+      values = SampleView(v.data(), long(v.shape(0)), 1, int(v.shape(1)), array_type(v, "values"));
+      positions = scattered->positions.data();
+      if (scattered->weights) weights = scattered->weights->data();
+    }
     try {
       py::gil_scoped_release free;
-      f = form(s, r, inspect(inputs), fr);
+      if (scattered) {
+        ScatteredInput in = scattered_input(values, positions, weights, r.input_transfer);
+        in.label = "values";
+        f = form_scattered(s, r, std::move(in), fr);
+      } else {
+        f = form(s, r, inspect(inputs), fr);
+      }
     } catch (...) {
       // whatever the abandoned engine threw (a band given up), the interruption
       if (signals.raised()) signals.raise();
@@ -218,6 +262,8 @@ py::tuple run_form(py::object input, const Settings& s, bool coefficients_only) 
     k->highlight_compressed = f.highlight_compressed;
     k->input_half = f.input_half;
     k->threads = r.threads;
+    k->report = f.scattered;
+    k->rule = r.scattered.rule;
     return py::make_tuple(py::none(), py::cast(std::move(k)), warnings);
   });
 }
@@ -232,7 +278,9 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
                     const std::string& nonfinite,
                     const std::string& prefilter, const std::string& clamp,
                     bool highlight_compress, int threads, bool coefficients_only,
-                    const std::string& input_transfer) {
+                    const std::string& input_transfer, std::optional<py::array> positions,
+                    std::optional<py::array> weights, std::optional<std::string> rule,
+                    std::optional<int> iterations) {
   Settings s;
   s.size = size;
   s.factor = factor;
@@ -251,7 +299,17 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
   s.highlight_compress = highlight_compress;
   s.input_transfer = input_transfer;
   s.threads = threads;
-  return run_form(input, s, coefficients_only);
+  if (rule) s.rule = *rule, s.rule_given = true;
+  if (iterations) s.iterations = *iterations, s.iterations_given = true;
+  std::optional<ScatteredArrays> scattered;
+  if (positions) {
+    scattered = ScatteredArrays{py::reinterpret_borrow<py::array>(input),
+                                py::array_t<double, py::array::c_style>::ensure(*positions), std::nullopt};
+    if (weights) scattered->weights = py::array_t<double, py::array::c_style>::ensure(*weights);
+    if (!scattered->positions || (weights && !*scattered->weights))
+      throw std::logic_error("_form(): positions or weights not float64");
+  }
+  return run_form(input, s, coefficients_only, scattered);
 }
 
 PyCoefficients load_file(const std::string& path, bool zero_nonfinite, int threads) {
@@ -405,6 +463,16 @@ PYBIND11_MODULE(_core, m) {
       })
       .def_property_readonly("channel_names", [](const PyCoefficients& c) { return c.channel_names; })
       .def_property_readonly("highlight_compressed", [](const PyCoefficients& c) { return c.highlight_compressed; })
+      .def_property_readonly("report", [](const PyCoefficients& c) -> py::object {
+        if (!c.report) return py::none();
+        py::dict d;
+        d["rule"] = scattered_rule_name(c.rule);
+        d["iterations"] = c.report->iterations;
+        d["residual"] = c.report->residual;
+        d["passes"] = c.report->passes;
+        d["bytes"] = c.report->bytes;
+        return d;
+      })
       .def_property_readonly("array", &grid_array)
       .def("_evaluate", &evaluate_at)
       .def("_resample", &resample_to)
@@ -415,7 +483,8 @@ PYBIND11_MODULE(_core, m) {
         py::arg("boundary"), py::arg("lattice"), py::arg("density"), py::arg("density_spelling"),
         py::arg("nonfinite"), py::arg("prefilter"), py::arg("clamp"),
         py::arg("highlight_compress"), py::arg("threads"), py::arg("coefficients_only"),
-        py::arg("input_transfer"));
+        py::arg("input_transfer"), py::arg("positions"), py::arg("weights"), py::arg("rule"),
+        py::arg("iterations"));
   m.def("_load", &load_file);
   m.def("_highpass_shares", [](FloatArray a, std::vector<double> cutoffs) {
     const ImageView im = view_of(a, "highpass_share()");
