@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <new>
 #include <mutex>
@@ -268,19 +269,15 @@ py::tuple run_form(py::object input, const Settings& s, bool coefficients_only,
   });
 }
 
-// _form: project() and coefficients() with their keywords as siproject's
-// options (None: not given).
-py::tuple form_with(py::object input, const std::string& size, std::optional<double> factor,
-                    const std::string& factor_spelling, std::optional<std::string> generator,
-                    std::optional<std::string> method, const std::string& display,
-                    const std::string& boundary, const std::string& lattice,
-                    std::optional<double> density, const std::string& density_spelling,
-                    const std::string& nonfinite,
-                    const std::string& prefilter, const std::string& clamp,
-                    bool highlight_compress, int threads, bool coefficients_only,
-                    const std::string& input_transfer, std::optional<py::array> positions,
-                    std::optional<py::array> weights, std::optional<std::string> rule,
-                    std::optional<int> iterations) {
+// The keywords as siproject's options (None: not given).
+Settings settings_of(const std::string& size, std::optional<double> factor,
+                     const std::string& factor_spelling, std::optional<std::string> generator,
+                     std::optional<std::string> method, const std::string& display,
+                     const std::string& boundary, const std::string& lattice,
+                     std::optional<double> density, const std::string& density_spelling,
+                     const std::string& nonfinite, const std::string& prefilter,
+                     const std::string& clamp, bool highlight_compress, int threads,
+                     const std::string& input_transfer) {
   Settings s;
   s.size = size;
   s.factor = factor;
@@ -299,6 +296,25 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
   s.highlight_compress = highlight_compress;
   s.input_transfer = input_transfer;
   s.threads = threads;
+  return s;
+}
+
+// _form: project() and coefficients() with their keywords as siproject's
+// options (None: not given).
+py::tuple form_with(py::object input, const std::string& size, std::optional<double> factor,
+                    const std::string& factor_spelling, std::optional<std::string> generator,
+                    std::optional<std::string> method, const std::string& display,
+                    const std::string& boundary, const std::string& lattice,
+                    std::optional<double> density, const std::string& density_spelling,
+                    const std::string& nonfinite,
+                    const std::string& prefilter, const std::string& clamp,
+                    bool highlight_compress, int threads, bool coefficients_only,
+                    const std::string& input_transfer, std::optional<py::array> positions,
+                    std::optional<py::array> weights, std::optional<std::string> rule,
+                    std::optional<int> iterations) {
+  Settings s = settings_of(size, factor, factor_spelling, generator, method, display, boundary,
+                           lattice, density, density_spelling, nonfinite, prefilter, clamp,
+                           highlight_compress, threads, input_transfer);
   if (rule) s.rule = *rule, s.rule_given = true;
   if (iterations) s.iterations = *iterations, s.iterations_given = true;
   std::optional<ScatteredArrays> scattered;
@@ -310,6 +326,185 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
       throw std::logic_error("_form(): positions or weights not float64");
   }
   return run_form(input, s, coefficients_only, scattered);
+}
+
+std::string pair_text(const std::pair<long, long>& p) {
+  return "(" + std::to_string(p.first) + ", " + std::to_string(p.second) + ")";
+}
+
+// _partial: siproject --partial of the input's rows (a file's data window)
+// or of the rows bands= or rows= names, to `out`. Returns the warnings.
+py::list partial_to(py::object input, const std::string& out,
+                    std::optional<std::pair<long, long>> bands,
+                    std::optional<std::pair<long, long>> rows, std::optional<long> grid_rows,
+                    const Settings& s) {
+  const bool is_array = py::isinstance<py::array>(input);
+  SampleView view;
+  std::string path;
+  if (is_array) {
+    const py::array array = py::reinterpret_borrow<py::array>(input);
+    const SampleType type = array_type(array, "_partial()");
+    if (array.ndim() != 3) throw std::logic_error("_partial(): the array is not (H, W, C)");
+    view = SampleView(array.data(), long(array.shape(1)), long(array.shape(0)),
+                      channel_count(array.shape(2), "array"), type);
+  } else {
+    path = py::str(input);
+  }
+  return translated(is_array, [&] {
+    check_output(out);
+    if (!holds_coefficients(out))
+      throw RequestError("out=" + out + ": partial files are OpenEXR (.exr)");
+    std::error_code same;
+    if (!is_array && std::filesystem::equivalent(path, out, same))
+      throw RequestError("out=" + out + " is the input file");
+    const Resolved r = resolve(s);
+    std::unique_ptr<ImageReader> reader;
+    long grid = 0;  // the grid's rows
+    if (is_array) {
+      grid = grid_rows ? *grid_rows : view.height;
+    } else {
+      if (grid_rows)
+        throw RequestError("grid_rows=: a file's display window gives its grid; grid_rows= is for "
+                           "an array of some rows");
+      reader = std::make_unique<ImageReader>(path);
+      grid = reader->full_height();
+    }
+    if (grid_rows && !(bands || rows))
+      throw RequestError("grid_rows=" + std::to_string(*grid_rows) +
+                         ": the array holds the rows bands= or rows= names; give one");
+    std::optional<std::pair<long, long>> span;  // first row, rows
+    const BandPartition partition(grid, kBandRows);
+    if (bands) {
+      const auto [b0, n] = *bands;
+      if (b0 < 0 || n < 1 || b0 > partition.count() - n)
+        throw RequestError("bands=" + pair_text(*bands) + ": the grid of " + std::to_string(grid) +
+                           " rows has " + std::to_string(partition.count()) + " bands of " +
+                           std::to_string(partition.band_rows()) + " rows (0 to " +
+                           std::to_string(partition.count() - 1) + "); (first, count) of them");
+      span = std::pair{partition.begin(b0), partition.end(b0 + n - 1) - partition.begin(b0)};
+    }
+    if (rows) {
+      const auto [y0, n] = *rows;
+      if (y0 < 0 || n < 1 || y0 > grid - n)
+        throw RequestError("rows=" + pair_text(*rows) + ": the grid has " + std::to_string(grid) +
+                           " rows; (first, count) of them");
+      span = rows;
+    }
+    ProjectionInput in;
+    std::vector<unsigned char> held;  // a file's rows read for bands= or rows=
+    if (is_array) {
+      if (grid_rows) {
+        if (view.height != span->second)
+          throw RequestError("grid_rows=" + std::to_string(*grid_rows) + ": the array holds " +
+                             std::to_string(view.height) + " rows, not the " +
+                             std::to_string(span->second) + " of " +
+                             (bands ? "bands=" + pair_text(*bands) : "rows=" + pair_text(*rows)));
+        in = ProjectionInput::memory(view, "array");
+      } else if (span) {
+        in = ProjectionInput::memory(SampleView(view.row(span->first), view.width, span->second,
+                                                view.channels, view.type),
+                                     "array");
+      } else {
+        in = ProjectionInput::memory(view, "array");
+      }
+      in.row = span ? span->first : 0;
+      in.rows = grid;
+    } else if (!span) {
+      in = ProjectionInput::file(path);
+    } else {
+      ImageReader& rd = *reader;
+      if (is_partial_file(rd) || is_coefficient_file(rd) || is_scattered_file(rd))
+        throw RequestError(path + ": a partial is made of a grid's samples, not of " +
+                           (is_partial_file(rd)       ? "a partial file"
+                            : is_coefficient_file(rd) ? "a coefficient file"
+                                                      : "scattered samples"));
+      if (rd.data_x() != rd.full_x() || rd.width() != rd.full_width() || rd.data_y() < rd.full_y())
+        throw InputError(path + ": not a row band of its display window (its data window must "
+                                "span the full width, within the display window)");
+      const long have = rd.data_y() - rd.full_y();
+      if (span->first < have || span->first + span->second > have + rd.height())
+        throw RequestError(path + ": " + (bands ? "bands=" + pair_text(*bands) : "rows=" + pair_text(*rows)) +
+                           " names rows " + std::to_string(span->first) + " to " +
+                           std::to_string(span->first + span->second - 1) + "; the file holds rows " +
+                           std::to_string(have) + " to " + std::to_string(have + rd.height() - 1) +
+                           " of its grid of " + std::to_string(grid));
+      const bool half = rd.stores_half();
+      const std::size_t values = std::size_t(span->second) * rd.width() * rd.channels();
+      check_memory(values * (half ? 2 : 4), path + "'s " + std::to_string(span->second) + " rows");
+      held.resize(values * (half ? 2 : 4));
+      {
+        py::gil_scoped_release free;
+        const long y0 = span->first - have, y1 = y0 + span->second;
+        if (half)
+          rd.read_rows_half(y0, y1, reinterpret_cast<std::uint16_t*>(held.data()));
+        else
+          rd.read_rows(y0, y1, reinterpret_cast<float*>(held.data()));
+      }
+      in = ProjectionInput::memory(
+          SampleView(held.data(), rd.width(), span->second, rd.channels(),
+                     half ? SampleType::Half : SampleType::Float),
+          std::filesystem::path(path).filename().string() + " rows " + std::to_string(span->first) +
+              " to " + std::to_string(span->first + span->second - 1));
+      in.row = span->first;
+      in.rows = grid;
+      in.channel_names = rd.channel_names();
+      in.alpha = rd.alpha_channel();
+      in.transfer = rd.transfer();
+    }
+    reader.reset();
+    FormRequest fr;
+    SignalPoll signals;
+    fr.interrupt = signals.hook();
+    Partial p;
+    try {
+      py::gil_scoped_release free;
+      p = form_partial(s, r, inspect({in}, true), fr);
+      StagedFileSignals cleanup;  // SIGTERM, SIGHUP... remove the staged file
+      write_partial(out, p);
+    } catch (...) {
+      if (signals.raised()) signals.raise();
+      throw;
+    }
+    py::list warnings;
+    if (p.nonfinite.count)
+      warnings.append("replaced " + std::to_string(p.nonfinite.count) +
+                      " non-finite samples with 0; first: " + p.nonfinite.where);
+    return warnings;
+  });
+}
+
+// _merge: partial files added into the single run's coefficients.
+py::tuple merge_from(const std::vector<std::string>& paths, int threads) {
+  std::vector<ProjectionInput> inputs;
+  for (const std::string& p : paths) inputs.push_back(ProjectionInput::file(p));
+  return translated(false, [&] {
+    Settings s;
+    s.threads = threads;
+    const Resolved r = resolve(s);
+    FormRequest fr;
+    fr.keep_coefficients = true;
+    fr.final_image = false;
+    Formed f;
+    {
+      py::gil_scoped_release free;
+      InputSet set = inspect(inputs);
+      if (!set.partial_files)
+        throw RequestError(set.label + " is not a partial file (siproject.partial() or siproject "
+                           "--partial)");
+      f = form(s, r, std::move(set), fr);
+    }
+    py::list warnings;
+    for (const std::string& w : f.warnings) warnings.append(w);
+    auto k = std::make_unique<PyCoefficients>();
+    k->k = std::move(f.coefficients);
+    k->channel_names = f.inputs.channel_names;
+    k->alpha = f.inputs.alpha;
+    k->label = f.inputs.label;
+    k->highlight_compressed = f.highlight_compressed;
+    k->input_half = f.input_half;
+    k->threads = r.threads;
+    return py::make_tuple(py::cast(std::move(k)), warnings);
+  });
 }
 
 PyCoefficients load_file(const std::string& path, bool zero_nonfinite, int threads) {
@@ -485,6 +680,32 @@ PYBIND11_MODULE(_core, m) {
         py::arg("highlight_compress"), py::arg("threads"), py::arg("coefficients_only"),
         py::arg("input_transfer"), py::arg("positions"), py::arg("weights"), py::arg("rule"),
         py::arg("iterations"));
+  m.def("_partial",
+        [](py::object input, const std::string& out, std::optional<std::pair<long, long>> bands,
+           std::optional<std::pair<long, long>> rows, std::optional<long> grid_rows,
+           const std::string& size, std::optional<double> factor, const std::string& factor_spelling,
+           std::optional<std::string> generator, std::optional<std::string> method,
+           const std::string& boundary, const std::string& lattice, std::optional<double> density,
+           const std::string& density_spelling, const std::string& nonfinite,
+           const std::string& prefilter, bool highlight_compress, int threads,
+           const std::string& input_transfer) {
+          const Settings s = settings_of(size, factor, factor_spelling, generator, method, "",
+                                         boundary, lattice, density, density_spelling, nonfinite,
+                                         prefilter, "none", highlight_compress, threads,
+                                         input_transfer);
+          return partial_to(input, out, bands, rows, grid_rows, s);
+        },
+        py::arg("input"), py::arg("out"), py::kw_only(), py::arg("bands"), py::arg("rows"),
+        py::arg("grid_rows"), py::arg("size"), py::arg("factor"), py::arg("factor_spelling"),
+        py::arg("generator"), py::arg("method"), py::arg("boundary"), py::arg("lattice"),
+        py::arg("density"), py::arg("density_spelling"), py::arg("nonfinite"),
+        py::arg("prefilter"), py::arg("highlight_compress"), py::arg("threads"),
+        py::arg("input_transfer"));
+  m.def("_merge", &merge_from);
+  m.def("_band_cuts", [](long rows, long parts) {
+    return translated(false, [&] { return band_cuts(rows, parts); });
+  });
+  m.attr("band_rows") = kBandRows;
   m.def("_load", &load_file);
   m.def("_highpass_shares", [](FloatArray a, std::vector<double> cutoffs) {
     const ImageView im = view_of(a, "highpass_share()");

@@ -42,6 +42,9 @@ __all__ = [
     "project",
     "coefficients",
     "load",
+    "partial",
+    "merge",
+    "band_cuts",
     "Coefficients",
     "highpass_share",
     "rms_difference",
@@ -407,6 +410,78 @@ def load(path: Union[str, "os.PathLike[str]"], *, nonfinite: str = "error",
     if _text("nonfinite", nonfinite) not in ("error", "zero"):
         raise ValueError(f"--nonfinite '{nonfinite}': expected error or zero")
     return Coefficients(_core._load(_path("path", path), nonfinite == "zero", _threads(threads)))
+
+
+def partial(input: Input, out: Union[str, "os.PathLike[str]"], *,
+            bands: Optional[Tuple[int, int]] = None, rows: Optional[Tuple[int, int]] = None,
+            grid_rows: Optional[int] = None, size: Optional[Size] = None,
+            output_shape: Optional[Tuple[int, int]] = None, factor: Optional[float] = None,
+            generator: Optional[str] = None, method: Optional[str] = None,
+            boundary: str = "mirror", lattice: str = "cartesian",
+            density: Optional[float] = None, nonfinite: str = "error", prefilter: str = "fft",
+            highlight_compress: bool = False, threads: int = 0,
+            input_transfer: str = "auto") -> None:
+    """Writes to `out` (.exr) the partial acquisition of some row bands of a
+    grid, as siproject --partial does, for merge() (or siproject --merge).
+
+    input: a file (a band render: the rows its data window holds within its
+        display window, as siproject --partial reads it) or an array (height,
+        width[, channels]), the whole grid.
+    bands=(first, count): the grid's bands of band_rows (256) rows to take,
+        or rows=(first, count) the same in rows (whole bands: first a
+        multiple of 256, the end one or the grid's end; band_cuts() says
+        where); from a file, those rows are read into memory first (the
+        file must hold them). None: all the input holds.
+    grid_rows: the array holds only the rows of bands= or rows=, of a grid
+        of grid_rows rows.
+    The other keywords are project()'s, as siproject --partial's options:
+    every partial of one merge is made with the same (they are recorded
+    in the file, and merge() refuses partials of different ones).
+    """
+    factor_spelling = "" if factor is None else str(factor)
+    density_spelling = "" if density is None else str(density)
+    if bands is not None and rows is not None:
+        raise ValueError("give bands=(first, count) or rows=(first, count), not both")
+    b = None if bands is None else _pair("bands", bands, "(first, count)")
+    r = None if rows is None else _pair("rows", rows, "(first, count)")
+    g = None if grid_rows is None else _whole("grid_rows", grid_rows, _LONG_RANGE)
+    warnings = _core._partial(
+        _samples(input), _path("out", out), bands=b, rows=r, grid_rows=g,
+        size=_size(size, output_shape, factor),
+        factor=_number("factor", factor, optional=True), factor_spelling=factor_spelling,
+        generator=_text("generator", generator, optional=True),
+        method=_text("method", method, optional=True),
+        boundary=_text("boundary", boundary), lattice=_text("lattice", lattice),
+        density=_number("density", density, optional=True), density_spelling=density_spelling,
+        nonfinite=_text("nonfinite", nonfinite), prefilter=_text("prefilter", prefilter),
+        highlight_compress=_flag("highlight_compress", highlight_compress),
+        threads=_threads(threads), input_transfer=_text("input_transfer", input_transfer))
+    for w in warnings:
+        _warnings.warn(w, RuntimeWarning, stacklevel=2)
+
+
+def merge(paths: Sequence[Union[str, "os.PathLike[str]"]], *, threads: int = 0) -> "Coefficients":
+    """The partial files of every band of one grid (partial() or siproject
+    --partial), in any order, added and prefiltered once: the single run's
+    coefficients, bit for bit, as siproject --merge makes them. Their
+    resample() is siproject --merge's image (--clamp local is siproject's
+    only). Partials that overlap, leave a gap or were made with other
+    options are a ValueError naming them."""
+    if isinstance(paths, (str, os.PathLike)):
+        raise _wrong("paths", paths, "a sequence of paths (the partial files)")
+    names = [_path("paths", p) for p in paths]
+    if not names:
+        raise ValueError("merge(): no partial file")
+    k, warnings = _core._merge(names, _threads(threads))
+    for w in warnings:
+        _warnings.warn(w, RuntimeWarning, stacklevel=2)
+    return Coefficients(k)
+
+
+def band_cuts(rows: int, parts: int) -> list:
+    """Where to cut a grid of `rows` rows into `parts` runs of whole bands
+    (siproject --band-cuts): the parts' first rows, then `rows`."""
+    return list(_core._band_cuts(_whole("rows", rows, _LONG_RANGE), _whole("parts", parts, _LONG_RANGE)))
 
 
 def _path(name: str, path) -> str:
