@@ -320,11 +320,13 @@ int run(const Options& o) {
   output_file.commit();
   const double t_write = seconds_since(t);
   if (o.verbose) {
+    const std::string from = f.scattered ? std::to_string(win * hin) + " scattered samples x " + std::to_string(C)
+                                         : std::to_string(win) + " x " + std::to_string(hin) + " x " + std::to_string(C);
     std::fprintf(stderr,
-                 "siproject: %ld x %ld x %d -> %ld x %ld, %s %s, display %s, boundary %s, %d threads\n"
+                 "siproject: %s -> %ld x %ld, %s %s, display %s, boundary %s, %d threads\n"
                  "siproject: read+acquire %.3f s, prefilter %.3f s, resample %.3f s, write %.3f s, "
                  "total %.3f s\n",
-                 win, hin, C, W, H, k.min_error ? "min-error" : "conventional",
+                 from.c_str(), W, H, k.min_error ? "min-error" : "conventional",
                  generator_name(k).c_str(), shown.name().c_str(), boundary_name(k.boundary).c_str(),
                  threads, f.acquire_seconds, f.prefilter_seconds, t_resample, t_write,
                  seconds_since(t_start));
@@ -333,6 +335,16 @@ int run(const Options& o) {
                    format_bytes(f.estimated_bytes).c_str(),
                    available_memory() == UINT64_MAX ? "no limit" : format_bytes(available_memory()).c_str());
     std::fputs(visit_space(k, [&](auto space) { return space.describe(k); }).c_str(), stderr);
+    if (f.scattered) {
+      const ScatteredReport& sr = *f.scattered;
+      std::fprintf(stderr, "siproject: %ld scattered samples, rule %s: %ld passes", win * hin,
+                   scattered_rule_name(r.scattered.rule), sr.passes);
+      if (r.scattered.rule == ScatteredRule::LeastSquares) {
+        std::fprintf(stderr, ", %d iterations, residual", sr.iterations);
+        for (double v : sr.residual) std::fprintf(stderr, " %.3g", v);
+      }
+      std::fprintf(stderr, ", %s of working grids\n", format_bytes(sr.bytes).c_str());
+    }
     std::fprintf(stderr, "siproject: output range [%g, %g], %ld negative samples", before.min,
                  before.max, before.negative);
     if (own_range)
@@ -541,7 +553,11 @@ int main(int argc, char** argv) try {
       "and clamped to [0, 1]; -d half or float gives linear samples. S < 1 upsamples (the input's cubic\n"
       "interpolant is projected). If IN is a coefficient file (--coeffs), the stored\n"
       "approximation is evaluated instead: at its own size, --size or --factor, with\n"
-      "any --display. Outputs replace a file only once written whole.\n"
+      "any --display. An OpenEXR file with position channels pFilm.x, pFilm.y holds\n"
+      "scattered samples, one per pixel in any layout: each at its (x, y) in output\n"
+      "pixels, weighing its \"weight\" channel (else the frame's area / N), the other\n"
+      "channels its values, projected onto the frame --size WxH gives (--rule).\n"
+      "Outputs replace a file only once written whole.\n"
       "Exit status: 0 success, 1 out of memory, 2 usage, 3 input, 4 output.",
       "siproject"};
   app.add_option("IN", o.inputs,
@@ -623,6 +639,15 @@ int main(int argc, char** argv) try {
                               "--lattice hex: lattice points per output pixel (at most one "
                               "per input sample)")
                    ->capture_default_str();
+  auto* rule = app.add_option(
+      "--rule", o.settings.rule,
+      "scattered samples (an EXR with position channels pFilm.x, pFilm.y): fit (weighted "
+      "least squares by preconditioned conjugate gradients), normalised (the sum normalised by "
+      "the weight sums, one pass) or plain (the weighted sum, for comparison) [default: fit; "
+      "normalised for --method conventional]");
+  auto* iterations = app.add_option("--iterations", o.settings.iterations,
+                                    "--rule fit: at most this many conjugate-gradient iterations")
+                         ->capture_default_str();
   auto* m = app.add_option("--method", o.settings.method,
                            "min-error (orthogonal projection, B-spline generators) or conventional "
                            "(normalised weighted average, any generator)")->capture_default_str();
@@ -686,6 +711,8 @@ int main(int argc, char** argv) try {
   st.boundary_given = b->count() > 0;
   st.lattice_given = lat->count() > 0;
   st.density_given = dens->count() > 0;
+  st.rule_given = rule->count() > 0;
+  st.iterations_given = iterations->count() > 0;
   if (fac->count() > 0) {
     st.factor = factor;
     st.factor_spelling = fac->as<std::string>();

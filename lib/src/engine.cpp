@@ -17,6 +17,7 @@
 #include "sis/memory.h"
 #include "sis/parallel.h"
 #include "sis/partial.h"
+#include "sis/scattered_input.h"
 #include "sis/projection.h"
 #include "sis/space.h"
 #include "space_sinks.h"
@@ -57,8 +58,9 @@ void add_nonfinite(NonFiniteReport& n, const Counts& count, const Counts& first,
 constexpr std::size_t kKeptOpen = 64;
 
 
-// Channel names of samples in memory: Y; R, G, B; R, G, B, A; else c0, c1...
-std::vector<std::string> default_names(int channels) {
+}  // namespace
+
+std::vector<std::string> default_channel_names(int channels) {
   if (channels == 1) return {"Y"};
   if (channels == 3) return {"R", "G", "B"};
   if (channels == 4) return {"R", "G", "B", "A"};
@@ -66,8 +68,6 @@ std::vector<std::string> default_names(int channels) {
   for (int c = 0; c < channels; ++c) v.push_back("c" + std::to_string(c));
   return v;
 }
-
-}  // namespace
 
 long first_nonfinite(const double* v, std::size_t n) {
   for (std::size_t q = 0; q < n; ++q)
@@ -169,9 +169,9 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs, bool partial) {
       if (im.width < 1 || im.height < 1 || im.channels < 1)
         throw InputError(in.name + ": empty image");
       const long full = in.rows > 0 ? in.rows : in.row + im.height;
-      h.push_back({&in, im.width, im.height, 0, 0, im.width, full, 0, in.row, im.channels, -1,
-                   in.channel_names.empty() ? default_names(im.channels) : in.channel_names,
-                   im.is_half(), default_transfer(im.is_integer(), ""),
+      h.push_back({&in, im.width, im.height, 0, 0, im.width, full, 0, in.row, im.channels, in.alpha,
+                   in.channel_names.empty() ? default_channel_names(im.channels) : in.channel_names,
+                   im.is_half(), in.transfer ? *in.transfer : default_transfer(im.is_integer(), ""),
                    im.type == SampleType::UInt8 ? 8 : im.type == SampleType::UInt16 ? 16 : 0, false,
                    in.name});
       continue;
@@ -181,6 +181,32 @@ InputSet inspect(const std::vector<ProjectionInput>& inputs, bool partial) {
     if (is_partial_file(r))
       throw RequestError(in.path + ": a partial file merges only with partial files, not with " +
                          (inputs.front().image ? inputs.front().name : inputs.front().path));
+    if (is_scattered_file(r)) {
+      // samples at their own places: one file, projected whole
+      if (inputs.size() > 1)
+        throw RequestError(in.path + ": a file of scattered samples (position channels " +
+                           kPositionChannelX + ", " + kPositionChannelY +
+                           ") is projected alone, not as a band or with other inputs");
+      if (partial)
+        throw RequestError(in.path + ": a file of scattered samples (position channels " +
+                           kPositionChannelX + ", " + kPositionChannelY +
+                           ") has no row bands; --partial takes a grid's bands");
+      const ScatteredLayout l = scattered_layout(r);
+      set.scattered_file = true;
+      set.width = r.width();
+      set.height = set.rows = r.height();
+      set.channels = int(l.values.size());
+      set.channel_names = l.names;
+      set.alpha = l.alpha;
+      set.half = r.stores_half();
+      set.integer_bits = l.integer_bits;
+      set.transfer = r.transfer();
+      set.srgb = set.transfer.kind == Transfer::SRGB;
+      set.label = fs::path(in.path).filename().string();
+      set.bands.push_back(in);
+      set.readers.push_back(std::move(reader));
+      return set;
+    }
     h.push_back({&in, r.width(), r.height(), r.full_x(), r.full_y(), r.full_width(),
                  r.full_height(), r.data_x(), r.data_y(), r.channels(), r.alpha_channel(),
                  r.channel_names(), r.stores_half(), r.transfer(), r.integer_bits(), is_coefficient_file(r),
@@ -541,6 +567,10 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
   if (in.coefficient_file)
     throw RequestError(in.bands.front().path +
                        " is a coefficient file: it is evaluated (load_coefficients), not projected");
+  if (in.scattered_file)
+    throw RequestError(in.bands.front().path +
+                       " is a file of scattered samples: form() projects it (read_scattered, "
+                       "project_scattered), not the grid's engine");
   const int threads = std::max(1, rq.threads);
   const SpaceRequest srq = space_request(in.width, in.height, in.channels, rq.width, rq.height,
                                          rq.method, rq.prefilter, rq.boundary, threads);

@@ -465,6 +465,11 @@ bool integer_type(TypeDesc t) {
 }
 }  // namespace
 
+std::string ImageReader::channel_type(int c) const {
+  const ImageSpec& s = impl_->spec;
+  return (c < int(s.channelformats.size()) ? s.channelformats[c] : s.format).c_str();
+}
+
 int ImageReader::integer_bits() const {
   const ImageSpec& s = impl_->spec;
   std::vector<TypeDesc> types = s.channelformats;

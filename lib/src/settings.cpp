@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "sis/projection.h"
+#include "sis/scattered_input.h"
 
 namespace sis {
 
@@ -127,6 +128,16 @@ Resolved resolve(const Settings& o) {
     }
   r.zero_nonfinite = o.nonfinite == "zero";
   r.highlight_compress = o.highlight_compress;
+  try {
+    r.scattered.rule = parse_scattered_rule(o.rule);
+  } catch (const std::invalid_argument&) {
+    throw RequestError("--rule '" + o.rule + "': expected fit, normalised or plain");
+  }
+  // the conventional methods take the normalised average
+  if (r.method == Method::Conventional && !o.rule_given) r.scattered.rule = ScatteredRule::NormalisedSum;
+  if (o.iterations < 0)
+    throw RequestError("--iterations " + std::to_string(o.iterations) + ": expected 0 or more");
+  r.scattered.iterations = o.iterations;
   return r;
 }
 
@@ -208,7 +219,20 @@ ProjectionRequest projection_request(const Settings& o, const Resolved& r, const
 }
 }  // namespace
 
+// --rule and --iterations: scattered samples only.
+void refuse_scattered_options(const Settings& o, const std::string& label) {
+  if (o.rule_given || o.iterations_given)
+    throw RequestError(std::string(o.rule_given ? "--rule" : "--iterations") +
+                       " applies to scattered samples (a file with position channels " +
+                       kPositionChannelX + ", " + kPositionChannelY + ", or positions= in Python); " +
+                       label + " is a grid of samples");
+}
+
 Partial form_partial(const Settings& o, const Resolved& r, InputSet set, const FormRequest& fr) {
+  if (set.scattered_file)
+    throw RequestError(set.label + ": a file of scattered samples has no row bands; --partial "
+                       "takes a grid's bands");
+  refuse_scattered_options(o, set.label);
   if (set.coefficient_file || set.partial_files)
     throw RequestError(set.label + ": a partial is made of samples, not of " +
                        (set.coefficient_file ? "a coefficient file" : "partial files"));
@@ -218,6 +242,11 @@ Partial form_partial(const Settings& o, const Resolved& r, InputSet set, const F
 }
 
 Formed form(const Settings& o, const Resolved& r, InputSet set, const FormRequest& fr) {
+  if (set.scattered_file) {
+    const ImageReader& reader = *set.readers.front();
+    return form_scattered(o, r, read_scattered(reader.path(), r.input_transfer, reader.signature()), fr);
+  }
+  refuse_scattered_options(o, set.label);
   Formed f;
   const int threads = r.threads;
   Coefficients& k = f.coefficients;
@@ -303,6 +332,148 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
   if (!fr.keep_coefficients) {
     Buffer<double>().swap(k.c.data);
   }
+  return f;
+}
+
+namespace {
+std::string number(double v) {
+  std::ostringstream m;
+  m << v;
+  return m.str();
+}
+
+// The samples checked as the input names them: positions finite and in
+// the frame, weights finite and > 0, values finite (or replaced by 0).
+void check_scattered(ScatteredInput& in, double W, double H, bool zero_nonfinite,
+                     NonFiniteReport& replaced) {
+  ScatteredSamples& s = in.samples;
+  const long n = s.count();
+  const int C = s.channels;
+  for (long i = 0; i < n; ++i) {
+    const double x = s.positions[2 * i], y = s.positions[2 * i + 1];
+    if (!(std::isfinite(x) && std::isfinite(y)))
+      throw InputError(in.positions_name + ": " + in.sample_name(i) + ": position (" + number(x) +
+                       ", " + number(y) + ") is not finite");
+    if (!(x >= 0 && x <= W && y >= 0 && y <= H))
+      throw InputError(in.positions_name + ": " + in.sample_name(i) + ": position (" + number(x) +
+                       ", " + number(y) + ") lies outside the frame [0, " + number(W) + "] x [0, " +
+                       number(H) + "] (output pixels, --size)");
+  }
+  if (!s.weights.empty())
+    for (long i = 0; i < n; ++i)
+      if (!(std::isfinite(s.weights[i]) && s.weights[i] > 0))
+        throw InputError(in.weights_name + ": " + in.sample_name(i) + ": weight " +
+                         number(s.weights[i]) + " (the area a sample stands for: finite and > 0)");
+  const long bad = first_nonfinite(s.values.data(), s.values.size());
+  if (bad < 0) return;
+  const long i = bad / C;
+  const int c = int(bad % C);
+  replaced.file = in.label;
+  replaced.channel = c;
+  replaced.x = in.grid_width > 0 ? in.grid_x + i % in.grid_width : i;
+  replaced.y = in.grid_width > 0 ? in.grid_y + i / in.grid_width : 0;
+  replaced.where = in.values_name + ": " + in.sample_name(i) + ": non-finite value (NaN or Inf) in channel " +
+                   (c < int(in.channel_names.size()) ? in.channel_names[c] : std::to_string(c));
+  if (!zero_nonfinite) throw InputError(replaced.where + "; use --nonfinite zero to replace them with 0");
+  for (double& v : s.values)
+    if (!std::isfinite(v)) v = 0, ++replaced.count;
+}
+}  // namespace
+
+Formed form_scattered(const Settings& o, const Resolved& r, ScatteredInput in, const FormRequest& fr) {
+  const std::string& label = in.label;
+  if (o.factor || o.scale)
+    throw RequestError(std::string(o.factor ? "--factor" : "--scale") + ": " + label +
+                       ": scattered samples have no grid to divide or scale; give the frame with "
+                       "--size WxH (output pixels, the positions' coordinates)");
+  if (!r.size.given() || !r.size.width || !r.size.height)
+    throw RequestError((o.size.empty() ? std::string("--size") : "--size " + o.size) + ": " + label +
+                       ": scattered samples need the frame as --size WxH in pixels (the "
+                       "positions' coordinates; no side from an aspect or a percentage)");
+  if (space_name(r.space) != "cartesian")
+    throw RequestError("--lattice " + o.lattice + ": " + label +
+                       ": scattered samples are projected onto the Cartesian lattice only (no "
+                       "scattered rule on the hexagonal lattice yet)");
+  if (r.clamp == Clamp::Local)
+    throw RequestError("--clamp local: " + label +
+                       ": scattered samples have no local range (the range of a grid's samples "
+                       "under each pixel); --clamp zero or none");
+  if (r.method == Method::Conventional && r.scattered.rule != ScatteredRule::NormalisedSum)
+    throw RequestError(std::string("--rule ") + scattered_rule_name(r.scattered.rule) +
+                       ": the conventional method takes the normalised weighted average (--rule "
+                       "normalised)");
+  Formed f;
+  const int threads = r.threads;
+  f.width = r.size.width;
+  f.height = r.size.height;
+  const int C = in.samples.channels;
+  if (C < 1) throw InputError(label + ": no value channel");
+  const long n = in.samples.count();
+  if (n < 1) throw InputError(label + ": no sample");
+  ScatteredTarget target;
+  target.width = double(f.width);
+  target.height = double(f.height);
+  target.generator = std::get<CartesianSpace>(r.space).generator;
+  target.boundary = r.boundary;
+  target.method = r.method;
+  target.prefilter = r.prefilter;
+  // the coefficients, the fit's four working grids and per-sample values, the output
+  const std::uint64_t grid = std::uint64_t(f.width) * std::uint64_t(f.height) * C;
+  f.estimated_bytes = projection_bytes(f.width, f.height, C, std::uint64_t(f.width) * f.height,
+                                       false, fr.coefficient_file, threads) +
+                      8 * (6 * grid + std::uint64_t(n) * C);
+  check_memory(f.estimated_bytes, "the projection of " + std::to_string(n) + " scattered samples to " +
+                                      std::to_string(f.width) + " x " + std::to_string(f.height) +
+                                      " x " + std::to_string(C));
+  check_scattered(in, target.width, target.height, r.zero_nonfinite, f.replaced);
+  if (f.replaced.count)
+    f.warnings.push_back("replaced " + std::to_string(f.replaced.count) +
+                         " non-finite values with 0; first: " + f.replaced.where);
+  if (r.highlight_compress) {
+    for (std::size_t q = 0; q < in.samples.values.size(); ++q)
+      if (int(q % C) != in.alpha) in.samples.values[q] = highlight_compress(in.samples.values[q]);
+  }
+  if (fr.interrupt) fr.interrupt();
+  const auto t = Clock::now();
+  ScatteredReport report;
+  Coefficients& k = f.coefficients;
+  try {
+    k = project_scattered(in.samples, target, r.scattered, &report);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(label + ": " + e.what());
+  }
+  f.acquire_seconds = seconds_since(t);
+  f.scattered = report;
+  in.samples = ScatteredSamples();  // the copies, before the final image
+  if (fr.float_coefficients)
+    for (std::size_t q = 0; q < k.c.data.size(); ++q) k.c.data[q] = static_cast<float>(k.c.data[q]);
+  const long overflow = first_nonfinite(k.c.data.data(), k.c.data.size());
+  if (overflow >= 0)
+    throw InputError(label + ": the values are too large: the coefficients pass float's largest "
+                     "value (3.4e38) at coefficient " +
+                     value_position(overflow, k.c.width, in.channel_names) + "; nothing written");
+  InputSet& set = f.inputs;
+  set.width = n;
+  set.height = set.rows = 1;
+  set.channels = C;
+  set.channel_names = in.channel_names;
+  set.alpha = in.alpha;
+  set.half = in.half;
+  set.transfer = in.transfer;
+  set.srgb = in.transfer.kind == Transfer::SRGB;
+  set.integer_bits = in.integer_bits;
+  set.label = label;
+  f.highlight_compressed = r.highlight_compress;
+  f.input_half = in.half;
+  f.input_transfer = in.transfer;
+  f.display = r.display ? *r.display : (k.min_error ? Display::antialiased_2x2() : Display::centred());
+  if (!fr.final_image) return f;
+  if (fr.interrupt) fr.interrupt();
+  const auto t2 = Clock::now();
+  f.final = final_image(k, f.display, f.width, f.height, f.highlight_compressed, r.clamp, nullptr,
+                        threads, label, set.channel_names, set.alpha);
+  f.resample_seconds = seconds_since(t2);
+  if (!fr.keep_coefficients) Buffer<double>().swap(k.c.data);
   return f;
 }
 

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <new>
 #include <mutex>
@@ -24,6 +25,8 @@
 #include "sis/engine.h"
 #include "sis/metrics.h"
 #include "sis/parallel.h"
+#include "sis/partial.h"
+#include "sis/scattered_input.h"
 #include "sis/settings.h"
 #include "sis/space.h"
 #include "sis/staged_file.h"
@@ -153,6 +156,34 @@ struct PyCoefficients {
   bool highlight_compressed = false;
   bool input_half = false;
   int threads = 1;
+  std::optional<ScatteredReport> report;  // of scattered samples
+  ScatteredRule rule = ScatteredRule::LeastSquares;
+};
+
+// The sample type of a C-contiguous array the wrapper made so (float32,
+// float16, uint8, uint16).
+SampleType array_type(const py::array& array, const char* what) {
+  const char kind = array.dtype().kind();
+  const auto size = array.itemsize();
+  const std::optional<SampleType> type =
+      kind == 'f' && size == 4   ? std::optional(SampleType::Float)
+      : kind == 'f' && size == 2 ? std::optional(SampleType::Half)
+      : kind == 'u' && size == 1 ? std::optional(SampleType::UInt8)
+      : kind == 'u' && size == 2 ? std::optional(SampleType::UInt16)
+                                 : std::nullopt;
+  if (!(array.flags() & py::array::c_style) || !type)
+    throw std::logic_error(std::string(what) + ": the array is not C-contiguous float32, float16, "
+                           "uint8 or uint16");
+  return *type;
+}
+
+// Positions with values (and weights) as the wrapper checked them: values
+// (N, C) of array_type()'s types, positions (N, 2) and weights (N,) float64
+// C-contiguous.
+struct ScatteredArrays {
+  py::array values;
+  py::array_t<double, py::array::c_style> positions;
+  std::optional<py::array_t<double, py::array::c_style>> weights;
 };
 
 int resolved_threads(int threads) {
@@ -164,33 +195,33 @@ int resolved_threads(int threads) {
 // Runs form() on a path or an array (float32 or float16, C-contiguous,
 // (H, W, C): the caller's wrapper makes it so), the GIL released.
 // Returns (image or None, coefficients or None, warnings).
-py::tuple run_form(py::object input, const Settings& s, bool coefficients_only) {
+py::tuple run_form(py::object input, const Settings& s, bool coefficients_only,
+                   const std::optional<ScatteredArrays>& scattered) {
   const bool is_array = py::isinstance<py::array>(input);
   std::vector<ProjectionInput> inputs;
   py::array array;
   std::string path;
-  if (is_array) {
+  if (scattered) {
+    if (scattered->values.ndim() != 2 || scattered->positions.ndim() != 2 ||
+        scattered->positions.shape(1) != 2 || scattered->positions.shape(0) != scattered->values.shape(0) ||
+        (scattered->weights && scattered->weights->size() != scattered->values.shape(0)))
+      throw std::logic_error("run_form(): scattered arrays of the wrong shapes");
+    array_type(scattered->values, "run_form()");
+    channel_count(scattered->values.shape(1), "values");
+  } else if (is_array) {
     array = py::reinterpret_borrow<py::array>(input);
-    const char kind = array.dtype().kind();
-    const auto size = array.itemsize();
-    const std::optional<SampleType> type =
-        kind == 'f' && size == 4   ? std::optional(SampleType::Float)
-        : kind == 'f' && size == 2 ? std::optional(SampleType::Half)
-        : kind == 'u' && size == 1 ? std::optional(SampleType::UInt8)
-        : kind == 'u' && size == 2 ? std::optional(SampleType::UInt16)
-                                   : std::nullopt;
-    if (array.ndim() != 3 || !(array.flags() & py::array::c_style) || !type)
-      throw std::logic_error("run_form(): the array is not C-contiguous float32, float16, uint8 or "
-                             "uint16 (H, W, C)");
+    const SampleType type = array_type(array, "run_form()");
+    if (array.ndim() != 3)
+      throw std::logic_error("run_form(): the array is not (H, W, C)");
     inputs.push_back(ProjectionInput::memory(
         SampleView(array.data(), long(array.shape(1)), long(array.shape(0)),
-                   channel_count(array.shape(2), "array"), *type),
+                   channel_count(array.shape(2), "array"), type),
         "array"));
   } else {
     path = py::str(input);
     inputs.push_back(ProjectionInput::file(path));
   }
-  return translated(is_array, [&] {
+  return translated(is_array || scattered, [&] {
     const Resolved r = resolve(s);
     FormRequest fr;
     fr.keep_coefficients = coefficients_only;
@@ -198,9 +229,23 @@ py::tuple run_form(py::object input, const Settings& s, bool coefficients_only) 
     SignalPoll signals;
     fr.interrupt = signals.hook();
     Formed f;
+    SampleView values;
+    const double *positions = nullptr, *weights = nullptr;
+    if (scattered) {
+      const py::array& v = scattered->values;
+      values = SampleView(v.data(), long(v.shape(0)), 1, int(v.shape(1)), array_type(v, "values"));
+      positions = scattered->positions.data();
+      if (scattered->weights) weights = scattered->weights->data();
+    }
     try {
       py::gil_scoped_release free;
-      f = form(s, r, inspect(inputs), fr);
+      if (scattered) {
+        ScatteredInput in = scattered_input(values, positions, weights, r.input_transfer);
+        in.label = "values";
+        f = form_scattered(s, r, std::move(in), fr);
+      } else {
+        f = form(s, r, inspect(inputs), fr);
+      }
     } catch (...) {
       // whatever the abandoned engine threw (a band given up), the interruption
       if (signals.raised()) signals.raise();
@@ -218,21 +263,21 @@ py::tuple run_form(py::object input, const Settings& s, bool coefficients_only) 
     k->highlight_compressed = f.highlight_compressed;
     k->input_half = f.input_half;
     k->threads = r.threads;
+    k->report = f.scattered;
+    k->rule = r.scattered.rule;
     return py::make_tuple(py::none(), py::cast(std::move(k)), warnings);
   });
 }
 
-// _form: project() and coefficients() with their keywords as siproject's
-// options (None: not given).
-py::tuple form_with(py::object input, const std::string& size, std::optional<double> factor,
-                    const std::string& factor_spelling, std::optional<std::string> generator,
-                    std::optional<std::string> method, const std::string& display,
-                    const std::string& boundary, const std::string& lattice,
-                    std::optional<double> density, const std::string& density_spelling,
-                    const std::string& nonfinite,
-                    const std::string& prefilter, const std::string& clamp,
-                    bool highlight_compress, int threads, bool coefficients_only,
-                    const std::string& input_transfer) {
+// The keywords as siproject's options (None: not given).
+Settings settings_of(const std::string& size, std::optional<double> factor,
+                     const std::string& factor_spelling, std::optional<std::string> generator,
+                     std::optional<std::string> method, const std::string& display,
+                     const std::string& boundary, const std::string& lattice,
+                     std::optional<double> density, const std::string& density_spelling,
+                     const std::string& nonfinite, const std::string& prefilter,
+                     const std::string& clamp, bool highlight_compress, int threads,
+                     const std::string& input_transfer) {
   Settings s;
   s.size = size;
   s.factor = factor;
@@ -251,7 +296,215 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
   s.highlight_compress = highlight_compress;
   s.input_transfer = input_transfer;
   s.threads = threads;
-  return run_form(input, s, coefficients_only);
+  return s;
+}
+
+// _form: project() and coefficients() with their keywords as siproject's
+// options (None: not given).
+py::tuple form_with(py::object input, const std::string& size, std::optional<double> factor,
+                    const std::string& factor_spelling, std::optional<std::string> generator,
+                    std::optional<std::string> method, const std::string& display,
+                    const std::string& boundary, const std::string& lattice,
+                    std::optional<double> density, const std::string& density_spelling,
+                    const std::string& nonfinite,
+                    const std::string& prefilter, const std::string& clamp,
+                    bool highlight_compress, int threads, bool coefficients_only,
+                    const std::string& input_transfer, std::optional<py::array> positions,
+                    std::optional<py::array> weights, std::optional<std::string> rule,
+                    std::optional<int> iterations) {
+  Settings s = settings_of(size, factor, factor_spelling, generator, method, display, boundary,
+                           lattice, density, density_spelling, nonfinite, prefilter, clamp,
+                           highlight_compress, threads, input_transfer);
+  if (rule) s.rule = *rule, s.rule_given = true;
+  if (iterations) s.iterations = *iterations, s.iterations_given = true;
+  std::optional<ScatteredArrays> scattered;
+  if (positions) {
+    scattered = ScatteredArrays{py::reinterpret_borrow<py::array>(input),
+                                py::array_t<double, py::array::c_style>::ensure(*positions), std::nullopt};
+    if (weights) scattered->weights = py::array_t<double, py::array::c_style>::ensure(*weights);
+    if (!scattered->positions || (weights && !*scattered->weights))
+      throw std::logic_error("_form(): positions or weights not float64");
+  }
+  return run_form(input, s, coefficients_only, scattered);
+}
+
+std::string pair_text(const std::pair<long, long>& p) {
+  return "(" + std::to_string(p.first) + ", " + std::to_string(p.second) + ")";
+}
+
+// _partial: siproject --partial of the input's rows (a file's data window)
+// or of the rows bands= or rows= names, to `out`. Returns the warnings.
+py::list partial_to(py::object input, const std::string& out,
+                    std::optional<std::pair<long, long>> bands,
+                    std::optional<std::pair<long, long>> rows, std::optional<long> grid_rows,
+                    const Settings& s) {
+  const bool is_array = py::isinstance<py::array>(input);
+  SampleView view;
+  std::string path;
+  if (is_array) {
+    const py::array array = py::reinterpret_borrow<py::array>(input);
+    const SampleType type = array_type(array, "_partial()");
+    if (array.ndim() != 3) throw std::logic_error("_partial(): the array is not (H, W, C)");
+    view = SampleView(array.data(), long(array.shape(1)), long(array.shape(0)),
+                      channel_count(array.shape(2), "array"), type);
+  } else {
+    path = py::str(input);
+  }
+  return translated(is_array, [&] {
+    check_output(out);
+    if (!holds_coefficients(out))
+      throw RequestError("out=" + out + ": partial files are OpenEXR (.exr)");
+    std::error_code same;
+    if (!is_array && std::filesystem::equivalent(path, out, same))
+      throw RequestError("out=" + out + " is the input file");
+    const Resolved r = resolve(s);
+    std::unique_ptr<ImageReader> reader;
+    long grid = 0;  // the grid's rows
+    if (is_array) {
+      grid = grid_rows ? *grid_rows : view.height;
+    } else {
+      if (grid_rows)
+        throw RequestError("grid_rows=: a file's display window gives its grid; grid_rows= is for "
+                           "an array of some rows");
+      reader = std::make_unique<ImageReader>(path);
+      grid = reader->full_height();
+    }
+    if (grid_rows && !(bands || rows))
+      throw RequestError("grid_rows=" + std::to_string(*grid_rows) +
+                         ": the array holds the rows bands= or rows= names; give one");
+    std::optional<std::pair<long, long>> span;  // first row, rows
+    const BandPartition partition(grid, kBandRows);
+    if (bands) {
+      const auto [b0, n] = *bands;
+      if (b0 < 0 || n < 1 || b0 > partition.count() - n)
+        throw RequestError("bands=" + pair_text(*bands) + ": the grid of " + std::to_string(grid) +
+                           " rows has " + std::to_string(partition.count()) + " bands of " +
+                           std::to_string(partition.band_rows()) + " rows (0 to " +
+                           std::to_string(partition.count() - 1) + "); (first, count) of them");
+      span = std::pair{partition.begin(b0), partition.end(b0 + n - 1) - partition.begin(b0)};
+    }
+    if (rows) {
+      const auto [y0, n] = *rows;
+      if (y0 < 0 || n < 1 || y0 > grid - n)
+        throw RequestError("rows=" + pair_text(*rows) + ": the grid has " + std::to_string(grid) +
+                           " rows; (first, count) of them");
+      span = rows;
+    }
+    ProjectionInput in;
+    std::vector<unsigned char> held;  // a file's rows read for bands= or rows=
+    if (is_array) {
+      if (grid_rows) {
+        if (view.height != span->second)
+          throw RequestError("grid_rows=" + std::to_string(*grid_rows) + ": the array holds " +
+                             std::to_string(view.height) + " rows, not the " +
+                             std::to_string(span->second) + " of " +
+                             (bands ? "bands=" + pair_text(*bands) : "rows=" + pair_text(*rows)));
+        in = ProjectionInput::memory(view, "array");
+      } else if (span) {
+        in = ProjectionInput::memory(SampleView(view.row(span->first), view.width, span->second,
+                                                view.channels, view.type),
+                                     "array");
+      } else {
+        in = ProjectionInput::memory(view, "array");
+      }
+      in.row = span ? span->first : 0;
+      in.rows = grid;
+    } else if (!span) {
+      in = ProjectionInput::file(path);
+    } else {
+      ImageReader& rd = *reader;
+      if (is_partial_file(rd) || is_coefficient_file(rd) || is_scattered_file(rd))
+        throw RequestError(path + ": a partial is made of a grid's samples, not of " +
+                           (is_partial_file(rd)       ? "a partial file"
+                            : is_coefficient_file(rd) ? "a coefficient file"
+                                                      : "scattered samples"));
+      if (rd.data_x() != rd.full_x() || rd.width() != rd.full_width() || rd.data_y() < rd.full_y())
+        throw InputError(path + ": not a row band of its display window (its data window must "
+                                "span the full width, within the display window)");
+      const long have = rd.data_y() - rd.full_y();
+      if (span->first < have || span->first + span->second > have + rd.height())
+        throw RequestError(path + ": " + (bands ? "bands=" + pair_text(*bands) : "rows=" + pair_text(*rows)) +
+                           " names rows " + std::to_string(span->first) + " to " +
+                           std::to_string(span->first + span->second - 1) + "; the file holds rows " +
+                           std::to_string(have) + " to " + std::to_string(have + rd.height() - 1) +
+                           " of its grid of " + std::to_string(grid));
+      const bool half = rd.stores_half();
+      const std::size_t values = std::size_t(span->second) * rd.width() * rd.channels();
+      check_memory(values * (half ? 2 : 4), path + "'s " + std::to_string(span->second) + " rows");
+      held.resize(values * (half ? 2 : 4));
+      {
+        py::gil_scoped_release free;
+        const long y0 = span->first - have, y1 = y0 + span->second;
+        if (half)
+          rd.read_rows_half(y0, y1, reinterpret_cast<std::uint16_t*>(held.data()));
+        else
+          rd.read_rows(y0, y1, reinterpret_cast<float*>(held.data()));
+      }
+      in = ProjectionInput::memory(
+          SampleView(held.data(), rd.width(), span->second, rd.channels(),
+                     half ? SampleType::Half : SampleType::Float),
+          std::filesystem::path(path).filename().string() + " rows " + std::to_string(span->first) +
+              " to " + std::to_string(span->first + span->second - 1));
+      in.row = span->first;
+      in.rows = grid;
+      in.channel_names = rd.channel_names();
+      in.alpha = rd.alpha_channel();
+      in.transfer = rd.transfer();
+    }
+    reader.reset();
+    FormRequest fr;
+    SignalPoll signals;
+    fr.interrupt = signals.hook();
+    Partial p;
+    try {
+      py::gil_scoped_release free;
+      p = form_partial(s, r, inspect({in}, true), fr);
+      StagedFileSignals cleanup;  // SIGTERM, SIGHUP... remove the staged file
+      write_partial(out, p);
+    } catch (...) {
+      if (signals.raised()) signals.raise();
+      throw;
+    }
+    py::list warnings;
+    if (p.nonfinite.count)
+      warnings.append("replaced " + std::to_string(p.nonfinite.count) +
+                      " non-finite samples with 0; first: " + p.nonfinite.where);
+    return warnings;
+  });
+}
+
+// _merge: partial files added into the single run's coefficients.
+py::tuple merge_from(const std::vector<std::string>& paths, int threads) {
+  std::vector<ProjectionInput> inputs;
+  for (const std::string& p : paths) inputs.push_back(ProjectionInput::file(p));
+  return translated(false, [&] {
+    Settings s;
+    s.threads = threads;
+    const Resolved r = resolve(s);
+    FormRequest fr;
+    fr.keep_coefficients = true;
+    fr.final_image = false;
+    Formed f;
+    {
+      py::gil_scoped_release free;
+      InputSet set = inspect(inputs);
+      if (!set.partial_files)
+        throw RequestError(set.label + " is not a partial file (siproject.partial() or siproject "
+                           "--partial)");
+      f = form(s, r, std::move(set), fr);
+    }
+    py::list warnings;
+    for (const std::string& w : f.warnings) warnings.append(w);
+    auto k = std::make_unique<PyCoefficients>();
+    k->k = std::move(f.coefficients);
+    k->channel_names = f.inputs.channel_names;
+    k->alpha = f.inputs.alpha;
+    k->label = f.inputs.label;
+    k->highlight_compressed = f.highlight_compressed;
+    k->input_half = f.input_half;
+    k->threads = r.threads;
+    return py::make_tuple(py::cast(std::move(k)), warnings);
+  });
 }
 
 PyCoefficients load_file(const std::string& path, bool zero_nonfinite, int threads) {
@@ -405,6 +658,16 @@ PYBIND11_MODULE(_core, m) {
       })
       .def_property_readonly("channel_names", [](const PyCoefficients& c) { return c.channel_names; })
       .def_property_readonly("highlight_compressed", [](const PyCoefficients& c) { return c.highlight_compressed; })
+      .def_property_readonly("report", [](const PyCoefficients& c) -> py::object {
+        if (!c.report) return py::none();
+        py::dict d;
+        d["rule"] = scattered_rule_name(c.rule);
+        d["iterations"] = c.report->iterations;
+        d["residual"] = c.report->residual;
+        d["passes"] = c.report->passes;
+        d["bytes"] = c.report->bytes;
+        return d;
+      })
       .def_property_readonly("array", &grid_array)
       .def("_evaluate", &evaluate_at)
       .def("_resample", &resample_to)
@@ -415,7 +678,34 @@ PYBIND11_MODULE(_core, m) {
         py::arg("boundary"), py::arg("lattice"), py::arg("density"), py::arg("density_spelling"),
         py::arg("nonfinite"), py::arg("prefilter"), py::arg("clamp"),
         py::arg("highlight_compress"), py::arg("threads"), py::arg("coefficients_only"),
+        py::arg("input_transfer"), py::arg("positions"), py::arg("weights"), py::arg("rule"),
+        py::arg("iterations"));
+  m.def("_partial",
+        [](py::object input, const std::string& out, std::optional<std::pair<long, long>> bands,
+           std::optional<std::pair<long, long>> rows, std::optional<long> grid_rows,
+           const std::string& size, std::optional<double> factor, const std::string& factor_spelling,
+           std::optional<std::string> generator, std::optional<std::string> method,
+           const std::string& boundary, const std::string& lattice, std::optional<double> density,
+           const std::string& density_spelling, const std::string& nonfinite,
+           const std::string& prefilter, bool highlight_compress, int threads,
+           const std::string& input_transfer) {
+          const Settings s = settings_of(size, factor, factor_spelling, generator, method, "",
+                                         boundary, lattice, density, density_spelling, nonfinite,
+                                         prefilter, "none", highlight_compress, threads,
+                                         input_transfer);
+          return partial_to(input, out, bands, rows, grid_rows, s);
+        },
+        py::arg("input"), py::arg("out"), py::kw_only(), py::arg("bands"), py::arg("rows"),
+        py::arg("grid_rows"), py::arg("size"), py::arg("factor"), py::arg("factor_spelling"),
+        py::arg("generator"), py::arg("method"), py::arg("boundary"), py::arg("lattice"),
+        py::arg("density"), py::arg("density_spelling"), py::arg("nonfinite"),
+        py::arg("prefilter"), py::arg("highlight_compress"), py::arg("threads"),
         py::arg("input_transfer"));
+  m.def("_merge", &merge_from);
+  m.def("_band_cuts", [](long rows, long parts) {
+    return translated(false, [&] { return band_cuts(rows, parts); });
+  });
+  m.attr("band_rows") = kBandRows;
   m.def("_load", &load_file);
   m.def("_highpass_shares", [](FloatArray a, std::vector<double> cutoffs) {
     const ImageView im = view_of(a, "highpass_share()");

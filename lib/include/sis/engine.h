@@ -45,6 +45,8 @@ struct ProjectionInput {
   long rows = 0;     // in-memory: the grid's height (0: the image's own)
   std::string name;  // in-memory: how messages name it ("array")
   std::vector<std::string> channel_names;  // in-memory (default R, G, B, A or c0...)
+  int alpha = -1;                          // in-memory: the alpha channel (-1: none)
+  std::optional<Transfer> transfer;        // in-memory: the samples' own (none: default_transfer)
 
   static ProjectionInput file(const std::string& path) {
     ProjectionInput in;
@@ -72,6 +74,10 @@ struct InputSet {
   int integer_bits = 0;  // bits of integer samples (8, 16...), 0 for float or half
   bool coefficient_file = false;
   bool partial_files = false;  // every input a partial file (sis/partial.h): merged, not read in bands
+  // A file of scattered samples (sis/scattered_input.h): its data window's
+  // samples (width x height), `channels` the value channels; projected by
+  // form(), not read in bands.
+  bool scattered_file = false;
   std::string label;   // "render.exr and 2 more bands"
   std::vector<ProjectionInput> bands;  // in row order
   // The files' readers, in the inputs' order: open until the reading is
@@ -176,6 +182,9 @@ std::uint64_t projection_bytes(long W, long H, int C, std::uint64_t coefficients
 double table_bytes(long coefficients_x, long samples_x, long coefficients_y, long samples_y,
                    double radius);
 void check_memory(std::uint64_t needed, const std::string& what);
+
+// Channel names of samples in memory: Y; R, G, B; R, G, B, A; else c0, c1...
+std::vector<std::string> default_channel_names(int channels);
 
 // The index of the first value that is NaN or infinite, or -1.
 long first_nonfinite(const double* v, std::size_t n);

@@ -126,6 +126,9 @@ class ImageReader {
   long full_width() const;
   long full_height() const;
   std::vector<std::string> channel_names() const;
+  // How channel c is stored, as OpenImageIO names the type: "half",
+  // "float", "uint8", "uint"...
+  std::string channel_type(int c) const;
   int alpha_channel() const;  // -1 if none
   // The samples' transfer by default_transfer(): integer samples sRGB
   // unless tagged otherwise (PNG, JPEG, TIFF, PNM... of 8 or 16 bits).

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "sis/engine.h"
+#include "sis/scattered.h"
 
 namespace sis {
 
@@ -36,10 +37,15 @@ struct Settings {
   // otherwise, float linear: default_transfer), srgb, linear or gammaG.
   std::string input_transfer = "auto";
   int threads = 0;  // 0: every core
+  // Scattered samples (sis/scattered_input.h): the rule (fit, normalised or
+  // plain) and the fit's iterations.
+  std::string rule = "fit";
+  int iterations = 5;
   // Which were given (a coefficient file refuses them; a conventional
   // filter named alone means the conventional method).
   bool generator_given = false, method_given = false, boundary_given = false;
   bool lattice_given = false, density_given = false;
+  bool rule_given = false, iterations_given = false;  // a grid input refuses them
 };
 
 // An output size as oiiotool's --resize spells it: "WxH", "W" (the height
@@ -68,6 +74,7 @@ struct Resolved {
   std::optional<Transfer> input_transfer;  // none: auto (the inputs' own)
   int threads = 1;                  // resolved: at least 1
   SizeSpec size;                     // --size (none: not given)
+  ScatteredOptions scattered;        // --rule, --iterations
 };
 Resolved resolve(const Settings& settings);
 
@@ -100,6 +107,7 @@ struct Formed {
   std::vector<std::string> warnings;  // for the user, without the tool's name
   double acquire_seconds = 0, prefilter_seconds = 0, resample_seconds = 0;
   std::uint64_t estimated_bytes = 0;
+  std::optional<ScatteredReport> scattered;  // scattered samples: what the rule did
 };
 
 // Projects (or evaluates a coefficient file, or merges partial files) and
@@ -108,6 +116,17 @@ Formed form(const Settings& settings, const Resolved& resolved, InputSet inputs,
             const FormRequest& request = {});
 Formed form(const Settings& settings, const std::vector<ProjectionInput>& inputs,
             const FormRequest& request = {});
+
+// Projects scattered samples (docs/design.md section 11) onto the Cartesian
+// space of the frame --size gives (width and height in pixels; --factor,
+// --scale, --lattice hex and --clamp local are refused) by the rule, then
+// forms the final image as form() does. Positions outside the frame or not
+// finite, weights not finite and > 0 are an InputError naming the input's
+// arrays and the sample; non-finite values too, or replaced by 0 with
+// --nonfinite zero. form() calls it for a file of scattered samples.
+struct ScatteredInput;
+Formed form_scattered(const Settings& settings, const Resolved& resolved, ScatteredInput input,
+                      const FormRequest& request = {});
 
 // The partial (sis/partial.h) of the bands the inputs hold
 // (inspect(inputs, true)), as siproject --partial makes it.

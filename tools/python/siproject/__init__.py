@@ -42,6 +42,9 @@ __all__ = [
     "project",
     "coefficients",
     "load",
+    "partial",
+    "merge",
+    "band_cuts",
     "Coefficients",
     "highpass_share",
     "rms_difference",
@@ -78,6 +81,7 @@ _TAKES = {
     "nonfinite": '"error" or "zero"',
     "prefilter": '"fft" or "recursive"',
     "clamp": '"none", "zero" or "local"',
+    "rule": '"fit", "normalised" or "plain"',
 }
 _INT_RANGE = (-2 ** 31, 2 ** 31 - 1)  # the engine's int
 _LONG_RANGE = (-2 ** 63, 2 ** 63 - 1)
@@ -180,12 +184,61 @@ def _samples(input: Input):
                          f"not shape {a.shape}")
     if a.shape[2] > _INT_RANGE[1]:  # before any copy
         raise ValueError(f"array: {a.shape[2]} channels: at most {_INT_RANGE[1]}")
+    return _values_dtype(a, "array")
+
+
+def _values_dtype(a: np.ndarray, what: str) -> np.ndarray:
+    """float32, float16, uint8 and uint16 as they are, other floats as float32."""
     if a.dtype not in (np.float32, np.float16, np.uint8, np.uint16):
         if not np.issubdtype(a.dtype, np.floating):
-            raise ValueError(f"array: samples of type {a.dtype} (expected float, linear; or uint8 "
+            raise ValueError(f"{what}: samples of type {a.dtype} (expected float, linear; or uint8 "
                              f"or uint16, display-encoded and scaled to [0, 1] as in image files)")
         a = a.astype(np.float32)
     return np.ascontiguousarray(a)
+
+
+def _coordinates(name: str, value, shape_text: str) -> np.ndarray:
+    """An array of real numbers as C-contiguous float64."""
+    a = np.asarray(value)
+    if a.dtype == np.bool_ or not (np.issubdtype(a.dtype, np.floating) or
+                                   np.issubdtype(a.dtype, np.integer)):
+        raise ValueError(f"{name}: of type {a.dtype} (expected real numbers, {shape_text})")
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _scattered(values, positions, weights):
+    """Values (N, C) as _samples' types, positions (N, 2) and weights (N,) as float64."""
+    if isinstance(values, (str, os.PathLike)):
+        raise ValueError("positions=: the values are an array (N,) or (N, channels), not a path "
+                         "(a file holds its positions in channels pFilm.x, pFilm.y)")
+    v = np.asarray(values)
+    if v.ndim == 1:
+        v = v[:, np.newaxis]
+    if v.ndim != 2:
+        raise ValueError(f"values: with positions=, expected (N,) or (N, channels), not shape "
+                         f"{v.shape}")
+    if v.shape[1] > _INT_RANGE[1]:
+        raise ValueError(f"values: {v.shape[1]} channels: at most {_INT_RANGE[1]}")
+    if v.shape[0] == 0 or v.shape[1] == 0:
+        raise ValueError(f"values: no sample (shape {v.shape})")
+    p = np.asarray(positions)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"positions: expected (N, 2), a row (x, y) in output pixels per sample, "
+                         f"not shape {p.shape}")
+    p = _coordinates("positions", p, "(N, 2)")
+    if p.shape[0] != v.shape[0]:
+        raise ValueError(f"positions: {p.shape[0]} rows for {v.shape[0]} samples of values: one "
+                         f"(x, y) per sample")
+    w = None
+    if weights is not None:
+        w = np.asarray(weights)
+        if w.ndim != 1:
+            raise ValueError(f"weights: expected (N,), the area each sample stands for, not shape "
+                             f"{w.shape}")
+        w = _coordinates("weights", w, "(N,)")
+        if w.shape[0] != v.shape[0]:
+            raise ValueError(f"weights: {w.shape[0]} for {v.shape[0]} samples: one per sample")
+    return _values_dtype(v, "values"), p, w
 
 
 def _image(image):
@@ -202,20 +255,42 @@ def _threads(threads) -> int:
     return _whole("threads", threads)
 
 
-def _grey(input) -> bool:
-    """An array of two dimensions: the result has two as well."""
-    return not isinstance(input, (str, os.PathLike)) and np.ndim(input) == 2
+def _grey(input, positions=None) -> bool:
+    """An array of two dimensions (of one with positions): the result has two as well."""
+    if isinstance(input, (str, os.PathLike)):
+        return False
+    return np.ndim(input) == (1 if positions is not None else 2)
 
 
 def _form(input, coefficients_only, *, size, output_shape, factor, generator, method, display,
           boundary, lattice, density, nonfinite, prefilter, clamp, highlight_compress, threads,
-          input_transfer):
+          input_transfer, positions=None, weights=None, rule=None, iterations=None):
     factor_spelling = "" if factor is None else str(factor)  # as given, for messages
     density_spelling = "" if density is None else str(density)
     factor = _number("factor", factor, optional=True)
     density = _number("density", density, optional=True)
+    rule = _text("rule", rule, optional=True)
+    iterations = None if iterations is None else _whole("iterations", iterations)
+    if positions is None:
+        if weights is not None:
+            raise ValueError("weights= goes with positions= (the area each scattered sample "
+                             "stands for)")
+        samples, p, w = _samples(input), None, None
+    else:
+        if factor is not None:
+            raise ValueError("factor=: scattered samples have no grid to divide; give the frame "
+                             "as size=(width, height) in output pixels, the positions' coordinates")
+        if size is None and output_shape is None:
+            raise ValueError("size=: scattered samples need the frame, size=(width, height) (or "
+                             "output_shape=(rows, cols)) in output pixels, the positions' "
+                             "coordinates")
+        if _text("lattice", lattice).lower() in ("hex", "hexagonal"):
+            raise ValueError(f"lattice={lattice!r}: scattered samples are projected onto the "
+                             f"Cartesian lattice only (no scattered rule on the hexagonal "
+                             f"lattice yet)")
+        samples, p, w = _scattered(input, positions, weights)
     result = _core._form(
-        _samples(input),
+        samples,
         size=_size(size, output_shape, factor),
         factor=factor, factor_spelling=factor_spelling,
         generator=_text("generator", generator, optional=True),
@@ -230,7 +305,8 @@ def _form(input, coefficients_only, *, size, output_shape, factor, generator, me
         highlight_compress=_flag("highlight_compress", highlight_compress),
         threads=_threads(threads),
         coefficients_only=coefficients_only,
-        input_transfer=_text("input_transfer", input_transfer))
+        input_transfer=_text("input_transfer", input_transfer),
+        positions=p, weights=w, rule=rule, iterations=iterations)
     for w in result[2]:
         _warnings.warn(w, RuntimeWarning, stacklevel=3)
     return result
@@ -243,7 +319,8 @@ def project(input: Input, *, size: Optional[Size] = None,
             lattice: str = "cartesian", density: Optional[float] = None,
             nonfinite: str = "error",
             prefilter: str = "fft", clamp: str = "none", highlight_compress: bool = False,
-            threads: int = 0, input_transfer: str = "auto") -> np.ndarray:
+            threads: int = 0, input_transfer: str = "auto", positions=None, weights=None,
+            rule: Optional[str] = None, iterations: Optional[int] = None) -> np.ndarray:
     """The final image of a render, as siproject forms it.
 
     input: a file path (any image OpenImageIO reads, streamed in bands as
@@ -274,18 +351,30 @@ def project(input: Input, *, size: Optional[Size] = None,
     input_transfer: "auto" (integer samples sRGB unless a file is tagged
         otherwise, float linear), "srgb", "linear" or "gammaG", as
         siproject's --input-transfer.
+    positions: scattered samples. input is then their values, (N,) or (N,
+        channels) (the types of an array input, by the same rule), and
+        positions an (N, 2) array of (x, y) in frame coordinates (output
+        pixels: pixel (i, j) covers [i, i+1) x [j, j+1)); the frame is size
+        (or output_shape), required; factor and lattice="hex" are refused.
+        weights: (N,), the area in output pixels^2 each sample stands for
+        (None: the frame's area / N each). rule: "fit" (weighted least
+        squares, None's default), "normalised" or "plain", as siproject's
+        --rule; iterations: the fit's (None: 5), --iterations. A file with
+        position channels (pFilm.x, pFilm.y) is projected so without
+        positions=.
 
     Returns a float32 array (height, width, channels): the linear result
     siproject writes to a float EXR, bit for bit; (height, width) for an
-    array of two dimensions.
+    array of two dimensions (values of one dimension with positions).
     """
     image, _, _ = _form(input, False, size=size, output_shape=output_shape, factor=factor,
                         generator=generator, method=method, display=display,
                         boundary=boundary, lattice=lattice, density=density,
                         nonfinite=nonfinite, prefilter=prefilter, clamp=clamp,
                         highlight_compress=highlight_compress, threads=threads,
-                        input_transfer=input_transfer)
-    return image[:, :, 0] if _grey(input) else image
+                        input_transfer=input_transfer, positions=positions, weights=weights,
+                        rule=rule, iterations=iterations)
+    return image[:, :, 0] if _grey(input, positions) else image
 
 
 def coefficients(input: Input, *, size: Optional[Size] = None,
@@ -295,20 +384,24 @@ def coefficients(input: Input, *, size: Optional[Size] = None,
                  density: Optional[float] = None,
                  nonfinite: str = "error", prefilter: str = "fft",
                  highlight_compress: bool = False, threads: int = 0,
-                 input_transfer: str = "auto") -> "Coefficients":
+                 input_transfer: str = "auto", positions=None, weights=None,
+                 rule: Optional[str] = None, iterations: Optional[int] = None) -> "Coefficients":
     """The coefficients of the approximation, with their space.
 
     The keywords are project()'s (there is no display or clamp: those apply
     when the coefficients are resampled). The coefficients are kept in float,
     as a coefficient file stores them, so that resample() gives project()'s
-    image exactly (of two dimensions for an array of two).
+    image exactly (of two dimensions for an array of two). Of scattered
+    samples (positions=, or a file with position channels) the result's
+    report says what the rule did.
     """
     _, k, _ = _form(input, True, size=size, output_shape=output_shape, factor=factor,
                     generator=generator, method=method, display=None, boundary=boundary,
                     lattice=lattice, density=density, nonfinite=nonfinite,
                     prefilter=prefilter, clamp="none", highlight_compress=highlight_compress,
-                    threads=threads, input_transfer=input_transfer)
-    return Coefficients(k, grey=_grey(input))
+                    threads=threads, input_transfer=input_transfer, positions=positions,
+                    weights=weights, rule=rule, iterations=iterations)
+    return Coefficients(k, grey=_grey(input, positions))
 
 
 def load(path: Union[str, "os.PathLike[str]"], *, nonfinite: str = "error",
@@ -317,6 +410,78 @@ def load(path: Union[str, "os.PathLike[str]"], *, nonfinite: str = "error",
     if _text("nonfinite", nonfinite) not in ("error", "zero"):
         raise ValueError(f"--nonfinite '{nonfinite}': expected error or zero")
     return Coefficients(_core._load(_path("path", path), nonfinite == "zero", _threads(threads)))
+
+
+def partial(input: Input, out: Union[str, "os.PathLike[str]"], *,
+            bands: Optional[Tuple[int, int]] = None, rows: Optional[Tuple[int, int]] = None,
+            grid_rows: Optional[int] = None, size: Optional[Size] = None,
+            output_shape: Optional[Tuple[int, int]] = None, factor: Optional[float] = None,
+            generator: Optional[str] = None, method: Optional[str] = None,
+            boundary: str = "mirror", lattice: str = "cartesian",
+            density: Optional[float] = None, nonfinite: str = "error", prefilter: str = "fft",
+            highlight_compress: bool = False, threads: int = 0,
+            input_transfer: str = "auto") -> None:
+    """Writes to `out` (.exr) the partial acquisition of some row bands of a
+    grid, as siproject --partial does, for merge() (or siproject --merge).
+
+    input: a file (a band render: the rows its data window holds within its
+        display window, as siproject --partial reads it) or an array (height,
+        width[, channels]), the whole grid.
+    bands=(first, count): the grid's bands of band_rows (256) rows to take,
+        or rows=(first, count) the same in rows (whole bands: first a
+        multiple of 256, the end one or the grid's end; band_cuts() says
+        where); from a file, those rows are read into memory first (the
+        file must hold them). None: all the input holds.
+    grid_rows: the array holds only the rows of bands= or rows=, of a grid
+        of grid_rows rows.
+    The other keywords are project()'s, as siproject --partial's options:
+    every partial of one merge is made with the same (they are recorded
+    in the file, and merge() refuses partials of different ones).
+    """
+    factor_spelling = "" if factor is None else str(factor)
+    density_spelling = "" if density is None else str(density)
+    if bands is not None and rows is not None:
+        raise ValueError("give bands=(first, count) or rows=(first, count), not both")
+    b = None if bands is None else _pair("bands", bands, "(first, count)")
+    r = None if rows is None else _pair("rows", rows, "(first, count)")
+    g = None if grid_rows is None else _whole("grid_rows", grid_rows, _LONG_RANGE)
+    warnings = _core._partial(
+        _samples(input), _path("out", out), bands=b, rows=r, grid_rows=g,
+        size=_size(size, output_shape, factor),
+        factor=_number("factor", factor, optional=True), factor_spelling=factor_spelling,
+        generator=_text("generator", generator, optional=True),
+        method=_text("method", method, optional=True),
+        boundary=_text("boundary", boundary), lattice=_text("lattice", lattice),
+        density=_number("density", density, optional=True), density_spelling=density_spelling,
+        nonfinite=_text("nonfinite", nonfinite), prefilter=_text("prefilter", prefilter),
+        highlight_compress=_flag("highlight_compress", highlight_compress),
+        threads=_threads(threads), input_transfer=_text("input_transfer", input_transfer))
+    for w in warnings:
+        _warnings.warn(w, RuntimeWarning, stacklevel=2)
+
+
+def merge(paths: Sequence[Union[str, "os.PathLike[str]"]], *, threads: int = 0) -> "Coefficients":
+    """The partial files of every band of one grid (partial() or siproject
+    --partial), in any order, added and prefiltered once: the single run's
+    coefficients, bit for bit, as siproject --merge makes them. Their
+    resample() is siproject --merge's image (--clamp local is siproject's
+    only). Partials that overlap, leave a gap or were made with other
+    options are a ValueError naming them."""
+    if isinstance(paths, (str, os.PathLike)):
+        raise _wrong("paths", paths, "a sequence of paths (the partial files)")
+    names = [_path("paths", p) for p in paths]
+    if not names:
+        raise ValueError("merge(): no partial file")
+    k, warnings = _core._merge(names, _threads(threads))
+    for w in warnings:
+        _warnings.warn(w, RuntimeWarning, stacklevel=2)
+    return Coefficients(k)
+
+
+def band_cuts(rows: int, parts: int) -> list:
+    """Where to cut a grid of `rows` rows into `parts` runs of whole bands
+    (siproject --band-cuts): the parts' first rows, then `rows`."""
+    return list(_core._band_cuts(_whole("rows", rows, _LONG_RANGE), _whole("parts", parts, _LONG_RANGE)))
 
 
 def _path(name: str, path) -> str:
@@ -334,6 +499,10 @@ class Coefficients:
     lattice ("cartesian" or "hexagonal"), generator, method, boundary, frame
     (width, height in output pixels), channel_names and array (the
     coefficient grid, (rows, columns, channels) float64, a copy) describe it.
+    report: of scattered samples, a dict of what the rule did: rule,
+    iterations (the fit's conjugate-gradient iterations run), residual (per
+    channel, ||b - G c|| / ||b|| at the end), passes (over the samples) and
+    bytes (the rule's working grids); None otherwise.
     """
 
     def __init__(self, core: "_core.Coefficients", *, grey: bool = False):
@@ -347,6 +516,7 @@ class Coefficients:
     frame = property(lambda self: tuple(self._k.frame))
     channel_names = property(lambda self: list(self._k.channel_names))
     array = property(lambda self: self._k.array)
+    report = property(lambda self: self._k.report)
 
     def __repr__(self) -> str:
         w, h = self.frame

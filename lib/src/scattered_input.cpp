@@ -1,0 +1,159 @@
+// Scattered samples from arrays and from files with position channels
+// (sis/scattered_input.h).
+#include "sis/scattered_input.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+
+#include "sis/engine.h"
+
+namespace fs = std::filesystem;
+
+namespace sis {
+
+using OIIO::TypeDesc;
+
+std::string ScatteredInput::sample_name(long i) const {
+  if (grid_width <= 0) return "row " + std::to_string(i);
+  return "pixel (" + std::to_string(grid_x + i % grid_width) + ", " +
+         std::to_string(grid_y + i / grid_width) + ")";
+}
+
+ScatteredInput scattered_input(const SampleView& values, const double* positions,
+                               const double* weights, const std::optional<Transfer>& transfer) {
+  if (values.height != 1 && values.width > 0)
+    throw std::logic_error("scattered_input(): the values are not one row of samples");
+  const long n = values.width;
+  const int C = values.channels;
+  ScatteredInput in;
+  in.half = values.is_half();
+  in.integer_bits = values.type == SampleType::UInt8 ? 8 : values.type == SampleType::UInt16 ? 16 : 0;
+  in.transfer = transfer ? *transfer : default_transfer(values.is_integer(), "");
+  in.channel_names = default_channel_names(C);
+  ScatteredSamples& s = in.samples;
+  s.channels = C;
+  s.positions.assign(positions, positions + 2 * std::size_t(n));
+  if (weights) s.weights.assign(weights, weights + n);
+  s.values.resize(std::size_t(n) * C);
+  // a chunk at a time: converted to float as a file's samples are, decoded, widened
+  constexpr long kChunk = 4096;
+  std::vector<float> f(std::size_t(std::min(n, kChunk)) * C);
+  const TypeDesc from = values.type == SampleType::UInt8    ? TypeDesc::UINT8
+                        : values.type == SampleType::UInt16 ? TypeDesc::UINT16
+                        : values.type == SampleType::Half   ? TypeDesc::HALF
+                                                            : TypeDesc::FLOAT;
+  for (long i0 = 0; i0 < n; i0 += kChunk) {
+    const long i1 = std::min(n, i0 + kChunk);
+    const std::size_t m = std::size_t(i1 - i0) * C;
+    const unsigned char* src = values.row(0) + std::size_t(i0) * C * values.value_bytes();
+    if (!OIIO::convert_pixel_values(from, src, TypeDesc::FLOAT, f.data(), int(m)))
+      throw std::logic_error("scattered_input(): the values were not converted");
+    decode_to_linear(in.transfer, f.data(), m, C, -1);
+    std::copy(f.begin(), f.begin() + m, s.values.begin() + std::size_t(i0) * C);
+  }
+  return in;
+}
+
+bool is_scattered_file(const ImageReader& reader) {
+  for (const std::string& n : reader.channel_names())
+    if (n == kPositionChannelX || n == kPositionChannelY) return true;
+  return false;
+}
+
+ScatteredLayout scattered_layout(const ImageReader& r) {
+  ScatteredLayout l;
+  const std::vector<std::string> names = r.channel_names();
+  for (int c = 0; c < int(names.size()); ++c) {
+    if (names[c] == kPositionChannelX) l.x = c;
+    else if (names[c] == kPositionChannelY) l.y = c;
+    else if (names[c] == kWeightChannel) l.weight = c;
+    else {
+      if (c == r.alpha_channel()) l.alpha = int(l.values.size());
+      l.values.push_back(c);
+      l.names.push_back(names[c]);
+    }
+  }
+  const std::string& path = r.path();
+  if (l.x < 0 || l.y < 0)
+    throw InputError(path + ": has the position channel " +
+                     (l.x < 0 ? kPositionChannelY : kPositionChannelX) + " but not " +
+                     (l.x < 0 ? kPositionChannelX : kPositionChannelY) +
+                     " (a file of scattered samples has both: each sample's x and y in output "
+                     "pixels)");
+  for (int c : {l.x, l.y, l.weight}) {
+    if (c < 0) continue;
+    const std::string t = r.channel_type(c);
+    if (t != "half" && t != "float" && t != "double")
+      throw InputError(path + ": channel " + names[c] + " is stored as " + t +
+                       "; positions and weights are float or half");
+  }
+  for (int c : l.values) {
+    const std::string t = r.channel_type(c);
+    const int b = t == "uint8" ? 8 : t == "uint16" ? 16 : t == "uint" || t == "uint32" ? 32 : 0;
+    if (!b) {
+      l.integer_bits = 0;
+      break;
+    }
+    l.integer_bits = std::max(l.integer_bits, b);
+  }
+  if (l.values.empty())
+    throw InputError(path + ": no value channel beside " + kPositionChannelX + ", " +
+                     kPositionChannelY + (l.weight >= 0 ? std::string(" and ") + kWeightChannel : "") +
+                     " (scattered samples need a value)");
+  return l;
+}
+
+ScatteredInput read_scattered(const std::string& path, const std::optional<Transfer>& transfer,
+                              const FileSignature& expected) {
+  ImageReader r(path, expected);
+  const ScatteredLayout l = scattered_layout(r);
+  const long w = r.width(), h = r.height();
+  const int all = r.channels(), C = int(l.values.size());
+  const std::uint64_t n = std::uint64_t(w) * std::uint64_t(h);
+  // the samples as doubles (positions, values, weights) and a strip of the file's rows
+  check_memory(n * std::uint64_t(8 * (2 + C + (l.weight >= 0))),
+               path + "'s " + std::to_string(n) + " scattered samples");
+  ScatteredInput in;
+  in.label = fs::path(path).filename().string();
+  in.channel_names = l.names;
+  in.alpha = l.alpha;
+  in.positions_name = path + ": " + kPositionChannelX + ", " + kPositionChannelY;
+  in.values_name = path;
+  in.weights_name = path + ": " + kWeightChannel;
+  in.grid_width = w;
+  in.grid_x = r.data_x();
+  in.grid_y = r.data_y();
+  in.transfer = transfer ? *transfer : r.transfer();
+  in.half = r.stores_half();
+  in.integer_bits = l.integer_bits;
+  ScatteredSamples& s = in.samples;
+  s.channels = C;
+  s.positions.resize(2 * n);
+  s.values.resize(n * C);
+  if (l.weight >= 0) s.weights.resize(n);
+  const long strip = std::max(1L, r.preferred_strip());
+  std::vector<float> rows(std::size_t(std::min(strip, h)) * w * all), v(std::size_t(w) * C);
+  for (long y0 = 0; y0 < h; y0 += strip) {
+    const long y1 = std::min(h, y0 + strip);
+    r.read_rows(y0, y1, rows.data());
+    for (long y = y0; y < y1; ++y) {
+      const float* p = rows.data() + std::size_t(y - y0) * w * all;
+      const std::size_t i0 = std::size_t(y) * w;
+      for (long x = 0; x < w; ++x) {
+        const float* q = p + std::size_t(x) * all;
+        s.positions[2 * (i0 + x)] = q[l.x];
+        s.positions[2 * (i0 + x) + 1] = q[l.y];
+        if (l.weight >= 0) s.weights[i0 + x] = q[l.weight];
+        for (int c = 0; c < C; ++c) v[std::size_t(x) * C + c] = q[l.values[c]];
+      }
+      decode_to_linear(in.transfer, v.data(), v.size(), C, in.alpha);
+      std::copy(v.begin(), v.end(), s.values.begin() + i0 * C);
+    }
+  }
+  return in;
+}
+
+}  // namespace sis
