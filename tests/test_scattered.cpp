@@ -85,7 +85,7 @@ Coefficients normalised_reference(const ScatteredSamples& s, const ScatteredTarg
   const long W = long(t.width), H = long(t.height);
   Coefficients k;
   k.c = Grid<double>(W, H, s.channels);
-  k.generator = t.generator;
+  k.space = CartesianSpace{t.generator};
   k.boundary = t.boundary;
   k.image_width = t.width;
   k.image_height = t.height;
@@ -210,7 +210,7 @@ TEST(Scattered, PlainSumAndConventionalEqualDirectDoubleSums) {
     const auto Phi = design(s, t);
     Coefficients want;
     want.c = Grid<double>(6, 4, 1);
-    want.generator = t.generator;
+    want.space = CartesianSpace{t.generator};
     want.boundary = t.boundary;
     for (long n = 0; n < 24; ++n) {
       double num = 0;

@@ -110,7 +110,7 @@ TEST(ScatteredRegions, FitReproducesASplineOfTheSpaceAcrossTheDensityBoundary) {
     Coefficients spline;
     spline.c = Grid<double>(long(kW), long(kH), 1);
     spline.lattice = t.lattice;
-    spline.generator = t.generator;
+    spline.space = CartesianSpace{t.generator};
     spline.boundary = t.boundary;
     spline.image_width = kW;
     spline.image_height = kH;

@@ -790,7 +790,7 @@ Coefficients make_coefficients(const ScatteredTarget& t, Grid<double> c) {
   Coefficients k;
   k.c = std::move(c);
   k.lattice = t.lattice;
-  k.generator = t.generator;
+  k.space = CartesianSpace{t.generator};
   k.boundary = t.boundary;
   k.min_error = t.method == Method::MinError;
   k.image_width = t.width;
@@ -918,10 +918,11 @@ std::vector<double> evaluate_at_samples(const Coefficients& k, const ScatteredSa
   t.width = k.image_width;
   t.height = k.image_height;
   t.lattice = k.lattice;
-  t.generator = k.generator;
+  if (!std::holds_alternative<CartesianSpace>(k.space))
+    throw std::invalid_argument("evaluate_at_samples: Cartesian coefficients only");
+  t.generator = k.kernel();
   t.boundary = k.boundary;
   t.method = k.min_error ? Method::MinError : Method::Conventional;
-  if (k.box_spline) throw std::invalid_argument("evaluate_at_samples: Cartesian coefficients only");
   const Geometry g = geometry(t);
   check(samples, t, k.c.channels, threads);
   std::vector<double> out(std::size_t(samples.count()) * k.c.channels);

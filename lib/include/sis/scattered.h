@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "sis/coefficients.h"
 #include "sis/acquisition.h"
 #include "sis/image.h"
 #include "sis/prefilter.h"
