@@ -21,7 +21,6 @@
 #include "cli.h"
 #include "version.h"
 #include "sis/engine.h"
-#include "sis/hex_lattice.h"
 #include "sis/memory.h"
 #include "sis/partial.h"
 #include "sis/projection.h"

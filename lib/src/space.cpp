@@ -68,6 +68,7 @@ std::unique_ptr<CartesianSink> CartesianSpace::sink(const SpaceRequest& rq) cons
   return std::make_unique<CartesianSink>(rq.input_width, rq.input_height, rq.channels, rq.width,
                                          rq.height, generator, rq.boundary, rq.method, rq.threads);
 }
+Metadata CartesianSpace::parameters() const { return {{"sis:generator", generator.name()}}; }
 void CartesianSpace::read_metadata(const Attributes& attribute, Coefficients& k) {
   const auto& L = k.lattice.matrix();
   if (!k.lattice.separable() || !(L[0] > 0) || !(L[3] > 0) || attribute("sis:storage") != "rows")
@@ -161,6 +162,9 @@ std::unique_ptr<HexagonalSink> HexagonalSpace::sink(const SpaceRequest& rq) cons
       hex_layout(density, double(rq.width), double(rq.height), hex_default_margin(order));
   return std::make_unique<HexagonalSink>(rq.input_width, rq.input_height, rq.channels, rq.width,
                                          rq.height, layout, order, rq.boundary, rq.threads);
+}
+Metadata HexagonalSpace::parameters() const {
+  return {{"sis:generator", BoxSpline::hexagonal(order).name()}, {"sis:density", number(density)}};
 }
 void HexagonalSpace::read_metadata(const Attributes& attribute, Coefficients& k) {
   if (!k.lattice.is_hexagonal() || attribute("sis:storage") != "offset-rows")

@@ -68,6 +68,9 @@ struct CartesianSpace {
   SpaceBudget budget(const SpaceRequest& rq) const;
   using Sink = CartesianSink;
   std::unique_ptr<CartesianSink> sink(const SpaceRequest& rq) const;
+  // Its parameters as metadata (sis:generator; a partial's request), as
+  // parse_space reads them back.
+  Metadata parameters() const;
 
   // c = r * a^{-1} (min-error; nothing for the conventional methods and degree 0)
   static void prefilter(Coefficients& k, int threads, PrefilterMethod method);
@@ -106,6 +109,7 @@ struct HexagonalSpace {
   SpaceBudget budget(const SpaceRequest& rq) const;
   using Sink = HexagonalSink;
   std::unique_ptr<HexagonalSink> sink(const SpaceRequest& rq) const;
+  Metadata parameters() const;  // sis:generator, sis:density
 
   static void prefilter(Coefficients& k, int threads, PrefilterMethod method);  // FFT only
   static Image resample(const Coefficients& k, const Display& display, long W, long H, int threads);
