@@ -201,16 +201,9 @@ ProjectionRequest projection_request(const Settings& o, const Resolved& r, const
                        "(or W, 0xH, P%) or --scale M (output = input x M)");
   std::tie(*width, *height) = output_size(o, r, set.width, set.height);
   ProjectionRequest rq;
+  static_cast<ProjectionTerms&>(rq) = r;
   rq.width = *width;
   rq.height = *height;
-  rq.space = r.space;
-  rq.method = r.method;
-  rq.boundary = r.boundary;
-  rq.prefilter = r.prefilter;
-  rq.zero_nonfinite = r.zero_nonfinite;
-  rq.highlight_compress = r.highlight_compress;
-  rq.input_transfer = r.input_transfer;
-  rq.threads = r.threads;
   rq.coefficient_file = fr.coefficient_file;
   rq.float_coefficients = fr.float_coefficients;
   rq.progress = fr.progress;

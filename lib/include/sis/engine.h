@@ -93,9 +93,10 @@ struct InputSet {
 // band's `rows`). Throws InputError naming the file.
 InputSet inspect(const std::vector<ProjectionInput>& inputs, bool partial = false);
 
-struct ProjectionRequest {
-  std::vector<ProjectionInput> inputs;
-  long width = 0, height = 0;  // the output frame, in pixels
+// A projection's terms: the space, method, boundary and prefilter, the
+// sample stages and the threads. A request holds them (with its inputs and
+// frame), and so do the settings resolved (settings.h).
+struct ProjectionTerms {
   Space space;  // sis/space.h: CartesianSpace{generator} or HexagonalSpace{order, density}
   Method method = Method::MinError;
   Boundary boundary = Boundary::Mirror;
@@ -105,6 +106,11 @@ struct ProjectionRequest {
   // The inputs' transfer as the user states it (none: their own, InputSet::transfer).
   std::optional<Transfer> input_transfer;
   int threads = 1;
+};
+
+struct ProjectionRequest : ProjectionTerms {
+  std::vector<ProjectionInput> inputs;
+  long width = 0, height = 0;  // the output frame, in pixels
   bool coefficient_file = false;   // the caller will also write the coefficients (memory estimate)
   // The sample type the coefficients are kept in: float (as a coefficient
   // file stores them, so that evaluating one reproduces the run exactly) or

@@ -63,16 +63,11 @@ SizeSpec parse_size(const std::string& spelling);
 
 // The settings in the engine's terms. Throws RequestError with the message
 // siproject prints ("--generator: unknown generator 'x' ...").
-struct Resolved {
-  Space space;
-  Method method = Method::MinError;
-  Boundary boundary = Boundary::Mirror;
+// The engine's terms (threads resolved: at least 1), and what the front
+// ends add.
+struct Resolved : ProjectionTerms {
   std::optional<Display> display;  // none: the method's default
   Clamp clamp = Clamp::None;
-  PrefilterMethod prefilter = PrefilterMethod::FFT;
-  bool zero_nonfinite = false, highlight_compress = false;
-  std::optional<Transfer> input_transfer;  // none: auto (the inputs' own)
-  int threads = 1;                  // resolved: at least 1
   SizeSpec size;                     // --size (none: not given)
   ScatteredOptions scattered;        // --rule, --iterations
 };
