@@ -30,9 +30,9 @@
 // rule is exact.
 //
 // Coefficients records a hexagonal approximation as: lattice = the hexagonal
-// lattice with o at stored (0, 0); c = the offset-row grid; generator =
-// Kernel::bspline(3n - 2), the box spline's polynomial degree (1: hex-hat,
-// 4: hex-quartic); boundary = the input's extension rule.
+// lattice with o at stored (0, 0); c = the offset-row grid; space =
+// HexagonalSpace{n, density} (n = 1: hex-hat, 2: hex-quartic); boundary =
+// the input's extension rule.
 #include <string>
 
 #include "sis/coefficients.h"
