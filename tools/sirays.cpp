@@ -487,8 +487,9 @@ std::string pov_string(const std::string& path) {
   return "\"" + path + "\"";
 }
 
-// The band's scene: the scene, then the mesh camera (the last camera
-// statement is the one POV-Ray uses).
+// The band's scene: the scene, the rays' mesh2 declared (a mesh_camera
+// takes a mesh { }, which keeps a declared mesh2's triangle order), then the
+// mesh camera (the last camera statement is the one POV-Ray uses).
 void write_mesh(const std::string& scene, const std::string& output, const SamplePattern& pat,
                 long y0, long y1, int threads) {
   const long gw = pat.grid_width();
@@ -502,8 +503,8 @@ void write_mesh(const std::string& scene, const std::string& output, const Sampl
           std::to_string(pat.height) + ", factor " + metadata_number(pat.factor) + "\n";
   head += "// render " + std::to_string(gw) + " x " + std::to_string(y1 - y0) +
           " (one row more under POV-Ray 3.7.0's FS#254) with -A\n";
-  head += "#include " + pov_string(fs::absolute(scene).lexically_normal().string()) + "\n";
-  head += "camera { mesh_camera { 1 0 mesh2 {\nvertex_vectors { " + std::to_string(3 * n) + ",\n";
+  head += "#version 3.7;\n#include " + pov_string(fs::absolute(scene).lexically_normal().string()) + "\n";
+  head += "#declare SIS_Rays = mesh2 {\nvertex_vectors { " + std::to_string(3 * n) + ",\n";
   write_all(staged.fd(), head, output);
   constexpr long kChunk = 1 << 16;
   const long chunks = (n + kChunk - 1) / kChunk;
@@ -543,7 +544,7 @@ void write_mesh(const std::string& scene, const std::string& output, const Sampl
   }
   char loc[128];
   std::snprintf(loc, sizeof loc, "<%.17g,%.17g,%.17g>", cam.location[0], cam.location[1], cam.location[2]);
-  faces += "}\ntranslate " + std::string(loc) + "\n} } }\n";
+  faces += "}\n}\ncamera { mesh_camera { 1 0 mesh { SIS_Rays translate " + std::string(loc) + " } } }\n";
   write_all(staged.fd(), faces, output);
   staged.commit();
 }
