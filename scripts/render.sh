@@ -107,7 +107,9 @@ filter_log() {
     # each message is taken whole, and the two expected ones dropped.
     awk '
       function flush() {
-        if (msg != "" && msg !~ /More than one camera/ && msg !~ /experimental feature\(s\): mesh/)
+        m = msg
+        gsub(/\n /, " ", m)
+        if (m ~ /[^ \n]/ && m !~ /More than one camera/ && m !~ /experimental feature\(s\): mesh/)
           printf "%s", msg
         msg = ""
       }
