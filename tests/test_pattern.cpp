@@ -102,32 +102,52 @@ TEST(Pattern, JitterHasOneSampleInEachCell) {
 }
 
 // Every elementary interval [a 2^-j, (a + 1) 2^-j) x [b 2^-(m-j), (b + 1) 2^-(m-j))
-// of the unit square holds exactly one of the 2^m points of each block.
-void expect_net(const std::vector<double>& xy, double W, double H, long first, int m) {
+// of pixel (px, py) holds exactly one of the samples [first, first + 2^m).
+void expect_net(const std::vector<double>& xy, long px, long py, long first, int m) {
   const long n = 1L << m;
   for (int j = 0; j <= m; ++j) {
     const long cx = 1L << j, cy = 1L << (m - j);
     std::vector<int> count(std::size_t(n), 0);
     for (long k = first; k < first + n; ++k) {
-      const long a = long(std::floor(xy[2 * k] / W * double(cx)));
-      const long b = long(std::floor(xy[2 * k + 1] / H * double(cy)));
-      ++count[std::size_t(b * cx + a)];
+      const double u = xy[2 * k] - double(px), v = xy[2 * k + 1] - double(py);
+      ASSERT_TRUE(u >= 0 && u < 1 && v >= 0 && v < 1) << "sample " << k << " outside pixel " << px << ", " << py;
+      ++count[std::size_t(long(std::floor(v * double(cy))) * cx + long(std::floor(u * double(cx))))];
     }
     for (long q = 0; q < n; ++q)
-      ASSERT_EQ(count[std::size_t(q)], 1) << "block from " << first << ", m " << m << ", intervals "
+      ASSERT_EQ(count[std::size_t(q)], 1) << "pixel (" << px << ", " << py << "), 2^" << m << " samples, intervals "
                                           << cx << " x " << cy << ", interval " << q;
   }
 }
 
-TEST(Pattern, SobolBlocksAreNets) {
+TEST(Pattern, SobolPixelsAreNets) {
   for (std::uint64_t seed : {0ULL, 5ULL, 123456789ULL}) {
-    // 4096 = 2^12 samples in a non-square frame: the unit square maps onto it
-    const SamplePattern p = make_pattern(PatternKind::Sobol, seed, 32, 8, 4);
-    ASSERT_EQ(p.count(), 4096);
+    // 256 rays per pixel: each pixel's samples are consecutive and a (0, 8, 2)-net
+    const SamplePattern p = make_pattern(PatternKind::Sobol, seed, 3, 2, 16);
+    ASSERT_EQ(p.count(), 6 * 256);
     const std::vector<double> xy = positions(p);
-    for (int m = 0; m <= 12; ++m)
-      for (long first = 0; first + (1L << m) <= p.count(); first += std::max(1L << m, 512L))
-        expect_net(xy, 32, 8, first, m);
+    for (long q = 0; q < 6; ++q) {
+      expect_net(xy, q % 3, q / 3, 256 * q, 8);
+      for (int m = 0; m < 8; ++m) expect_net(xy, q % 3, q / 3, 256 * q, m);  // every prefix of 2^m
+    }
+  }
+}
+
+TEST(Pattern, SobolSpreadsAnyDensityEvenlyOverThePixels) {
+  // 12 x 9 = 108 samples over 35 pixels: each pixel holds 3 or 4
+  const SamplePattern p = make_pattern(PatternKind::Sobol, 1, 7, 5, 1.7);
+  ASSERT_EQ(p.count(), 108);
+  const std::vector<double> xy = positions(p);
+  std::vector<int> count(35, 0);
+  long last = -1;
+  for (long k = 0; k < p.count(); ++k) {
+    const long q = long(std::floor(xy[2 * k + 1])) * 7 + long(std::floor(xy[2 * k]));
+    ASSERT_GE(q, last) << "the pixels' samples are consecutive";
+    last = q;
+    ++count[std::size_t(q)];
+  }
+  for (int c : count) {
+    EXPECT_GE(c, 3);
+    EXPECT_LE(c, 4);
   }
 }
 

@@ -34,8 +34,14 @@ double uniform(std::uint64_t key, std::uint64_t k) {
   return double(mix_bits(key ^ mix_bits(k)) >> 11) * 0x1p-53;
 }
 
-// Sobol' dimension 0: the van der Corput radical inverse in base 2, as 32 bits.
-std::uint32_t sobol0(std::uint32_t k) {
+// Owen scrambling by hashing, as pbrt-v4's samplers do by default
+// (FastOwenScrambler, after Laine and Karras 2011, Burley 2020): in the
+// bit-reversed value, xor with even multiples, addition and odd
+// multiplication carry only towards higher bits, so each bit of the result
+// depends on the bits above it in the value: a nested scramble, a bijection
+// of every elementary interval onto one of the same size, so the net
+// property holds.
+std::uint32_t reverse_bits(std::uint32_t k) {
   k = (k << 16) | (k >> 16);
   k = ((k & 0x00ff00ffu) << 8) | ((k & 0xff00ff00u) >> 8);
   k = ((k & 0x0f0f0f0fu) << 4) | ((k & 0xf0f0f0f0u) >> 4);
@@ -43,6 +49,18 @@ std::uint32_t sobol0(std::uint32_t k) {
   k = ((k & 0x55555555u) << 1) | ((k & 0xaaaaaaaau) >> 1);
   return k;
 }
+std::uint32_t owen_scramble(std::uint32_t v, std::uint32_t seed) {
+  v = reverse_bits(v);
+  v ^= v * 0x3d20adeau;
+  v += seed;
+  v *= (seed >> 16) | 1u;
+  v ^= v * 0x05526c56u;
+  v ^= v * 0x53a22864u;
+  return reverse_bits(v);
+}
+
+// Sobol' dimension 0: the van der Corput radical inverse in base 2, as 32 bits.
+std::uint32_t sobol0(std::uint32_t k) { return reverse_bits(k); }
 
 // Sobol' dimension 1 (primitive polynomial x + 1): direction numbers
 // v_1 = 2^31, v_j = v_{j-1} xor (v_{j-1} >> 1), the Pascal matrix mod 2.
@@ -51,19 +69,6 @@ std::uint32_t sobol1(std::uint32_t k) {
   for (; k; k >>= 1, v ^= v >> 1)
     if (k & 1) y ^= v;
   return y;
-}
-
-// Owen's nested uniform scrambling by hashing (pbrt-v4's OwenScrambler):
-// bit 31 - b flips by a hash of the bits above it and the seed, so every
-// elementary interval maps onto one of the same size and the net property
-// holds.
-std::uint32_t owen_scramble(std::uint32_t v, std::uint32_t seed) {
-  if (seed & 1) v ^= 1u << 31;
-  for (int b = 1; b < 32; ++b) {
-    const std::uint32_t mask = ~0u << (32 - b);
-    if (std::uint32_t(mix_bits((v & mask) ^ seed)) & (1u << b)) v ^= 1u << (31 - b);
-  }
-  return v;
 }
 
 // 32 bits to (0, 1): the middle of its interval of 2^-32, so that the
@@ -129,10 +134,18 @@ Vec2 sample_position(const SamplePattern& p, long k) {
       return {(double(i) + u) * W / double(gw), (double(l) + v) * H / double(gh)};
     }
     case PatternKind::Sobol: {
-      const std::uint32_t kk = std::uint32_t(k);
-      const double u = unit(owen_scramble(sobol0(kk), std::uint32_t(stream_key(p.seed, 0))));
-      const double v = unit(owen_scramble(sobol1(kk), std::uint32_t(stream_key(p.seed, 1))));
-      return {u * W, v * H};
+      // pixel q holds samples [c(q), c(q + 1)), c(q) = floor(q N / P) (P
+      // pixels, N samples): the counts differ by at most one; sample k is
+      // point k - c(q) of pixel q's own scrambled sequence.
+      __extension__ typedef unsigned __int128 u128;
+      const std::uint64_t P = std::uint64_t(p.width) * std::uint64_t(p.height);
+      const std::uint64_t N = std::uint64_t(gw) * std::uint64_t(gh);
+      const std::uint64_t q = std::uint64_t((u128(k + 1) * P - 1) / N);
+      const std::uint64_t i = std::uint64_t(k) - std::uint64_t(u128(q) * N / P);
+      const std::uint64_t pixel = mix_bits(p.seed ^ mix_bits(q ^ 0x5851f42d4c957f2dULL));
+      const double u = unit(owen_scramble(sobol0(std::uint32_t(i)), std::uint32_t(stream_key(pixel, 0))));
+      const double v = unit(owen_scramble(sobol1(std::uint32_t(i)), std::uint32_t(stream_key(pixel, 1))));
+      return {double(q % std::uint64_t(p.width)) + u, double(q / std::uint64_t(p.width)) + v};
     }
   }
   return {};

@@ -50,14 +50,15 @@ def test_jitter_one_per_cell():
 
 
 def test_sobol_elementary_intervals():
-    # 2^10 points in a 4 x 1 frame: each interval of area 2^-10 of the unit square holds one
-    p = siproject.sample_positions("sobol", seed=9, size=(4, 1), rays_per_pixel=256)
-    assert len(p) == 1024
-    u, v = p[:, 0] / 4, p[:, 1]
-    for j in range(11):
-        a = np.floor(u * 2 ** j).astype(int)
-        b = np.floor(v * 2 ** (10 - j)).astype(int)
-        assert np.array_equal(np.bincount(b * 2 ** j + a, minlength=1024), np.ones(1024, int)), j
+    # 1024 rays per pixel of a 2 x 1 frame: each pixel's interval of area 2^-10 holds one
+    p = siproject.sample_positions("sobol", seed=9, size=(2, 1), rays_per_pixel=1024)
+    assert len(p) == 2048
+    for q in range(2):
+        u, v = p[1024 * q:1024 * (q + 1), 0] - q, p[1024 * q:1024 * (q + 1), 1]
+        for j in range(11):
+            a = np.floor(u * 2 ** j).astype(int)
+            b = np.floor(v * 2 ** (10 - j)).astype(int)
+            assert np.array_equal(np.bincount(b * 2 ** j + a, minlength=1024), np.ones(1024, int)), (q, j)
 
 
 def test_errors():

@@ -15,12 +15,15 @@
 //   jitter   ((i + u) W / gw, (l + v) H / gh), u, v uniform in [0, 1) from a
 //            hash of (seed, k): one uniform sample in each cell of the grid
 //            (the s x s cells of a pixel at whole s);
-//   sobol    (W x_k, H y_k), (x_k, y_k) point k of the Owen-scrambled Sobol'
-//            (0, 2)-sequence (dimensions 0 and 1, pbrt-v4's OwenScrambler,
-//            seeded per dimension): the first 2^m points, and each block of
-//            2^m points from an index divisible by 2^m, form a (0, m, 2)-net:
-//            every elementary interval of area 2^-m of the unit square
-//            (mapped onto the frame) holds exactly one.
+//   sobol    per output pixel, as pbrt-v4's PaddedSobolSampler: pixel q
+//            (row-major) holds samples [c(q), c(q + 1)), c(q) = floor(q N / P)
+//            of the N samples over P = W H pixels (counts differ by at most
+//            one, any density), and sample c(q) + j is (qx + x_j, qy + y_j),
+//            point j of the Sobol' (0, 2)-sequence (dimensions 0 and 1)
+//            Owen-scrambled by a hash of (seed, q, dimension) (pbrt-v4's
+//            FastOwenScrambler): a pixel's first 2^m samples form a
+//            (0, m, 2)-net, every elementary interval of area 2^-m of the
+//            pixel holding exactly one.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -48,8 +51,7 @@ struct SamplePattern {
 };
 
 // A checked pattern: std::invalid_argument for a frame side < 1, a factor
-// not finite and > 0, a grid side < 1 or a count past 2^32 (the Sobol'
-// index).
+// not finite and > 0, a grid side < 1 or a count past 2^32.
 SamplePattern make_pattern(PatternKind kind, std::uint64_t seed, long width, long height,
                            double factor);
 
