@@ -307,6 +307,10 @@ $(foreach s,$(ALL_SCENES),$(foreach i,$(band_indices),$(eval $(call band_rules,$
 $(if $(SAMPLES_TAG),$(foreach s,$(ALL_SCENES),$(foreach i,$(mesh_indices),$(eval $(call mesh_rules,$(s),$(i),$(shell echo $$(( $(i) * $(MESH_ROWS) ))),$(call mesh_y1,$(i)))))))
 $(foreach s,$(ALL_SCENES),$(eval $(call scene_rules,$(s)))$(foreach m,$(METHODS),$(eval $(call method_rules,$(s),$(m)))))
 
+# The render alone, as a make target: make render SCENE=... SAMPLES=...
+.PHONY: render
+render: $(call render_of,$(SCENE))
+
 # Without SIPROJECT given, set up and build first (the build brings the
 # default binaries up to date; images depend on them).
 scene: $(if $(PREBUILT),,build) $(call summary_of,$(SCENE)) $(call dir_of,$(SCENE))/index.html
@@ -382,6 +386,43 @@ compare-hex: $(if $(PREBUILT),,build)
 	@$(PYTHON) scripts/compare_hex.py --work $(OUT)/compare-hex$(if $(QUICK),-quick) \
 	  --report $(OUT)/$(if $(QUICK),report-quick,report)/hex \
 	  $(if $(QUICK),--res 64 --factors "2 4" --ref-factor 8 --spp 8 --border 8)
+# make compare-samples [QUICK=1]: the sample patterns compared
+# (scripts/compare_samples.py): every scene, pattern, density and seed
+# rendered as make's render targets (make render SAMPLES=... in
+# $(CS_WORK)), each method's L2 error against the truth, its displayed
+# image's error, the high-pass share, their spread across seeds. Report:
+# $(OUT)/report/samples/ (QUICK: $(OUT)/report-quick/samples/, 64 x 64,
+# 4 and 16 rays per pixel, 2 seeds, three scenes).
+ifneq ($(QUICK),)
+CS_SCENES    ?= checker edges zoneplate
+CS_RES       ?= 64
+CS_FACTORS   ?= 2 4
+CS_SEEDS     ?= 0 1
+CS_REF_FACTOR ?= 8
+else
+CS_SCENES    ?= checker objects edges zoneplate
+CS_RES       ?= 256
+CS_FACTORS   ?= 1.41421356 2 2.82842712 4
+CS_SEEDS     ?= 0 1 2 3
+CS_REF_FACTOR ?= 32
+endif
+CS_WORK ?= $(OUT)/compare-samples$(if $(QUICK),-quick)
+CS_MAKE = $(MAKE) --no-print-directory SIPROJECT=$(SIPROJECT) SIMETRICS=$(SIMETRICS) SIRAYS=$(SIRAYS) \
+  OUT=$(CS_WORK) RES=$(CS_RES) ZP_NYQUIST=$(ZP_NYQUIST)
+.PHONY: compare-samples
+compare-samples: $(if $(PREBUILT),,build)
+	@set -e; for s in $(CS_SCENES); do \
+	  [ $$s = zoneplate ] || $(CS_MAKE) SCENE=$$s FACTOR=$(CS_REF_FACTOR) render; \
+	  for f in $(CS_FACTORS); do \
+	    $(CS_MAKE) SCENE=$$s FACTOR=$$f render; \
+	    for p in jitter sobol; do for k in $(CS_SEEDS); do \
+	      $(CS_MAKE) -j$(JOBS) SCENE=$$s FACTOR=$$f SAMPLES=$$p SEED=$$k render; \
+	    done; done; \
+	  done; \
+	done
+	@$(PYTHON) scripts/compare_samples.py --work $(CS_WORK) --report $(OUT)/$(if $(QUICK),report-quick,report)/samples \
+	  --scenes '$(CS_SCENES)' --res $(CS_RES) --factors '$(CS_FACTORS)' --seeds '$(CS_SEEDS)' \
+	  --ref-factor $(CS_REF_FACTOR) --zp-nyquist $(ZP_NYQUIST)
 # ==== end of comparison ========================================================
 
 # ---- bench: siproject against oiiotool, splineops and the decode floor ---------
