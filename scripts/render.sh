@@ -113,6 +113,7 @@ filter_log() {
           printf "%s", msg
         msg = ""
       }
+      { sub(/.*\r/, "") }  # a progress line ended by a carriage return
       /^ / && msg != "" { msg = msg $0 "\n"; next }
       { flush(); msg = $0 "\n" }
       END { flush() }
@@ -120,11 +121,15 @@ filter_log() {
   else cat; fi
 }
 
+# A mesh band is named by its file name alone, from its folder, so that
+# POV-Ray's messages about it wrap between words.
+input=$scene run_dir=$PWD
+if [ "${RENDER_MESH_CAMERA:-0}" = 1 ]; then input=${scene##*/} run_dir=$scene_dir; fi
 set +e
-HOME=$work/home POVINI=$ini povray \
-  +I"\"$scene\"" +O"\"$tmp\"" +W"$width" +H"$height" \
+( cd -- "$run_dir" && HOME=$work/home POVINI=$ini exec povray \
+  +I"\"$input\"" +O"\"$tmp\"" +W"$width" +H"$height" \
   -A +FE -D -P +MI"$mi" +L"\"$scene_dir\"" \
-  "$@" >"$log" 2>&1 </dev/null &
+  "$@" ) >"$log" 2>&1 </dev/null &
 pid=$!
 wait "$pid"
 rc=$?
