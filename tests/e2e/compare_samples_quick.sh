@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # compare_samples_quick.sh SOURCE_DIR SIPROJECT SIMETRICS SIRAYS
 #
-# make compare-samples QUICK=1 (ctest label e2e; about 90 s): the report has
+# make compare-samples QUICK=1 (ctest label e2e; about 1.5 to 2.5 minutes): the report has
 # a row for every scene, method, density and pattern with finite numbers,
 # the chart exists, and a second run renders nothing again (the renders are
 # make targets under its one staleness rule).
