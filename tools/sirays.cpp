@@ -133,6 +133,7 @@ class CameraParser {
     throw InputError(path_ + ":" + std::to_string(line) + ": camera: " + what);
   }
   bool at(const char* s) const { return pos_ < t_.size() && t_[pos_].text == s; }
+  void back() { --pos_; }  // the token just taken, for a message naming its line
   bool done() const { return pos_ >= t_.size(); }
   const std::string& peek() const { return t_[pos_].text; }
   std::string next() {
@@ -165,7 +166,8 @@ class CameraParser {
 
  private:
   Value combine(Value a, Value b, char op) {
-    if ((op == '*' || op == '/') && a.vector && b.vector && op == '/') fail("a vector divided by a vector");
+    // vectors combine component by component, as POV-Ray's do; a number is
+    // promoted to <n, n, n>
     Value r;
     r.vector = a.vector || b.vector;
     for (int c = 0; c < 3; ++c) {
@@ -350,9 +352,10 @@ Camera parse_camera(const std::string& path, long image_width, long image_height
       for (int c = 0; c < 3; ++c) q.m[c][c] = s[c];
       trans = trans.then(q);
     } else {
-      throw InputError(path + ": camera: '" + item +
-                       "' is not supported by sirays (perspective or orthographic; location, "
-                       "direction, right, up, sky, look_at, angle; rotate, translate, scale)");
+      p.back();
+      p.fail("'" + item +
+             "' is not supported by sirays (perspective or orthographic; location, "
+             "direction, right, up, sky, look_at, angle; rotate, translate, scale)");
     }
   }
   if (had_angle && angle > 0) {

@@ -95,6 +95,18 @@ rc=0
 [ "$rc" -eq 3 ] && grep -q "narrow.exr: 40 pixels wide" "$tmp/err" && [ ! -e "$tmp/asm.exr" ] &&
   ok "a band of the wrong width refused" || { cat "$tmp/err" >&2; fail "a narrow band: expected status 3, got $rc"; }
 
+# 4b. a camera sirays cannot aim: status 3, the scene's line named, no band written
+printf '#version 3.7;\n// a fisheye\ncamera {\n  fisheye\n  angle 180\n}\n' > "$tmp/fisheye.pov"
+printf '#version 3.7;\nsphere { 0, 1 }\n' > "$tmp/nocamera.pov"
+for case in "fisheye:fisheye.pov:4: camera: 'fisheye' is not supported by sirays" \
+            "nocamera:nocamera.pov: no camera { ... } statement"; do
+  name=${case%%:*} expect=${case#*:}
+  rc=0
+  "$sirays" mesh "$tmp/$name.pov" -o "$tmp/$name-band.pov" --size 4x4 --factor 1 2>"$tmp/err" || rc=$?
+  [ "$rc" -eq 3 ] && grep -qF "$expect" "$tmp/err" && [ ! -e "$tmp/$name-band.pov" ] &&
+    ok "$name: refused ($(cat "$tmp/err"))" || { cat "$tmp/err" >&2; fail "$name: expected status 3 and '$expect', got $rc"; }
+done
+
 # 5. make SAMPLES=jitter: mesh bands rendered in parallel, assembled, projected
 if make -C "$src" --no-print-directory -j2 SIPROJECT="$siproject" SIRAYS="$sirays" OUT="$tmp/out" \
      SCENE=checker RES=16 FACTOR=3 SAMPLES=jitter SEED=2 MESH_RAYS=700 METHODS=me-cubic \
