@@ -4,6 +4,8 @@
 #   make all-scenes  the same for every scene in scenes/
 #   make test        set up, build, run every test (ctest)
 #   make compare     accuracy against speed, every scene and method: out/report/
+#   make compare-samples  the sample patterns compared: out/report/samples/
+#   make render      the render of SCENE alone (with SAMPLES, SEED...)
 #   make stability   where the methods fail: out/report/stability/
 #   make bench       speed and memory against oiiotool and splineops: out/bench/
 #   make install     build, then install into PREFIX (default /usr/local):
