@@ -512,8 +512,10 @@ void write_mesh(const std::string& scene, const std::string& output, const Sampl
   constexpr long kChunk = 1 << 16;
   const long chunks = (n + kChunk - 1) / kChunk;
   const double W = double(pat.width), H = double(pat.height);
-  for (long c0 = 0; c0 < chunks; c0 += 64) {  // at most 4 M rays' text at once
-    const long c1 = std::min(chunks, c0 + 64);
+  // at most 16 chunks (1 M rays, about 100 MB of text) in memory at once,
+  // whatever the band's size
+  for (long c0 = 0; c0 < chunks; c0 += 16) {
+    const long c1 = std::min(chunks, c0 + 16);
     std::vector<std::string> text(std::size_t(c1 - c0));
     parallel_for(c1 - c0, threads, [&](long a, long b) {
       std::vector<double> xy(2 * kChunk);
@@ -521,7 +523,7 @@ void write_mesh(const std::string& scene, const std::string& output, const Sampl
         const long f0 = (c0 + c) * kChunk, f1 = std::min(n, f0 + kChunk);
         sample_positions(pat, y0 * gw + f0, y0 * gw + f1, xy.data());
         std::string& s = text[std::size_t(c)];
-        s.reserve(std::size_t(f1 - f0) * 100);
+        s.reserve(std::size_t(f1 - f0) * 136);  // a ray is at most about 130 characters
         for (long f = f0; f < f1; ++f) {
           V3 o, d;
           camera_ray(cam, xy[2 * (f - f0)] / W - 0.5, 0.5 - xy[2 * (f - f0) + 1] / H, o, d);
