@@ -4,6 +4,8 @@
 #   make all-scenes  the same for every scene in scenes/
 #   make test        set up, build, run every test (ctest)
 #   make compare     accuracy against speed, every scene and method: out/report/
+#   make compare-samples  the sample patterns compared: out/report/samples/
+#   make render      the render of SCENE alone (with SAMPLES, SEED...)
 #   make stability   where the methods fail: out/report/stability/
 #   make bench       speed and memory against oiiotool and splineops: out/bench/
 #   make install     build, then install into PREFIX (default /usr/local):
@@ -30,6 +32,15 @@
 #   POVOPTS=         extra POV-Ray options for every render (Declare=X=1)
 #   ZP_NYQUIST=0.7   zoneplate only: local frequency at the middle of the left
 #                    and right edges, as a fraction of Nyquist at output size
+#   SAMPLES=regular  where the rays go (sis/pattern.h): regular (POV-Ray's own
+#                    camera, one ray through each pixel centre of the
+#                    supersampled render), jitter (one uniform ray in each of
+#                    its cells) or sobol (Owen-scrambled Sobol' points); the
+#                    last two trace through a mesh camera (build/tools/sirays)
+#                    in bands of at most MESH_RAYS rays, and write to
+#                    $(OUT)/SCENE-SAMPLES-sSEED/
+#   SEED=0           the pattern's seed (jitter, sobol)
+#   MESH_RAYS=2000000  rays per mesh band (one POV-Ray process each, make -j)
 #   TILES=1          render in TILES row bands, each its own POV-Ray process
 #                    (+SR/+ER, cropped to its rows with oiiotool): with make -j
 #                    they render in parallel, and a make-driven farm can send
@@ -44,6 +55,9 @@
 #   $(OUT)/SCENE/METHOD.exr, .png, .log   float result, 8-bit sRGB image,
 #                                         siproject -v output (stage times)
 #   $(OUT)/SCENE/summary.txt, .csv        time and high-pass share per method
+#   $(OUT)/render/SCENE-RES-fFACTOR-SAMPLES-sSEED.exr   the mesh bands' renders
+#                    assembled, the pattern in its metadata (SAMPLES not regular;
+#                    the bands ...-meshIofK.exr, their scenes removed once rendered)
 # A render is redone when its scene, povray.ini, size, factor or POV-Ray
 # options change; an image when its render, siproject or its options change.
 # Hidden stamp files (.NAME.cmd) hold the options each file was made with.
@@ -62,6 +76,9 @@ POVOPTS ?=
 ZP_NYQUIST ?= 0.7
 SCENEDIR ?= scenes
 TILES ?= 1
+SAMPLES ?= regular
+SEED ?= 0
+MESH_RAYS ?= 2000000
 
 # siproject options of each method. Every choice is spelled out: siproject's
 # default display for min-error is 2x2, so the plain min-error methods say
@@ -83,6 +100,7 @@ METHOD_OPTS_hex-quartic  := --lattice hex --generator hex-quartic --display cent
 # are brought up to date by the build target first.
 SIPROJECT ?= $(BUILD)/tools/siproject
 SIMETRICS ?= $(BUILD)/tools/simetrics
+SIRAYS ?= $(BUILD)/tools/sirays
 PREBUILT := $(filter command line environment,$(origin SIPROJECT))
 
 # Sub-makes (cmake --build) print no "Entering directory" lines.
@@ -90,7 +108,7 @@ MAKEFLAGS += --no-print-directory
 # One job at a time: POV-Ray and siproject use every core themselves, and the
 # times in the summary stay comparable. Bands (TILES > 1) are meant to run
 # in parallel.
-ifeq ($(TILES),1)
+ifeq ($(TILES)-$(SAMPLES),1-regular)
 .NOTPARALLEL:
 endif
 .DELETE_ON_ERROR:
@@ -129,6 +147,7 @@ band-cuts:
 
 ifeq ($(PREBUILT),)
 $(SIPROJECT): build ;
+$(SIRAYS): build ;
 endif
 
 # ---- the render pipeline ------------------------------------------------------
@@ -148,6 +167,15 @@ $(error FACTOR=$(FACTOR): expected a positive number)
 endif
 ifneq ($(shell echo '$(TILES)' | grep -Ex '[1-9][0-9]*'),$(TILES))
 $(error TILES=$(TILES): expected a positive whole number)
+endif
+ifeq ($(filter $(SAMPLES),regular jitter sobol),)
+$(error SAMPLES=$(SAMPLES): expected regular, jitter or sobol)
+endif
+ifneq ($(shell echo '$(SEED)' | grep -Ex '[0-9]+'),$(SEED))
+$(error SEED=$(SEED): expected a whole number >= 0)
+endif
+ifneq ($(shell echo '$(MESH_RAYS)' | grep -Ex '[1-9][0-9]*'),$(MESH_RAYS))
+$(error MESH_RAYS=$(MESH_RAYS): expected a positive whole number)
 endif
 RES_TAG := $(if $(filter $(RES_W),$(RES_H)),$(RES_W),$(RES_W)x$(RES_H))
 RENDER_W := $(shell awk 'BEGIN { printf "%d", $(RES_W) * $(FACTOR) + 0.5 }')
@@ -174,8 +202,12 @@ $(shell mkdir -p $(dir $(1)))$(file >$(1).tmp,$(2))
 @if cmp -s $(1).tmp $(1); then rm -f $(1).tmp; else mv -f $(1).tmp $(1); fi
 endef
 
-render_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR).exr
-render_stamp_of = $(OUT)/render/.$(1)-$(RES_TAG)-f$(FACTOR).cmd
+# SAMPLES other than regular: the pattern's tag in the render's and the
+# results' names; the results go to $(OUT)/SCENE-SAMPLES-sSEED.
+SAMPLES_TAG := $(if $(filter regular,$(SAMPLES)),,-$(SAMPLES)-s$(SEED))
+dir_of = $(OUT)/$(1)$(SAMPLES_TAG)
+render_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).exr
+render_stamp_of = $(OUT)/render/.$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).cmd
 render_opts_of = $(strip $(POVOPTS_$(1)) $(POVOPTS))
 # Row bands: band I of TILES starts at the row `siproject --band-cuts H,TILES`
 # prints, a whole number of the engine's bands of BAND_ROWS rows (sis/bands.h,
@@ -190,9 +222,9 @@ band_y0 = $(shell i=$$(( $(1) )); \
   if [ $$i -ge $(TILES) ]; then echo $(RENDER_H); \
   elif [ $(engine_bands) -ge $(TILES) ]; then echo $$(( $(BAND_ROWS) * ( i * $(engine_bands) / $(TILES) ) )); \
   else echo $$(( i * $(RENDER_H) / $(TILES) )); fi)
-inputs_of = $(if $(filter 1,$(TILES)),$(call render_of,$(1)),$(foreach i,$(band_indices),$(call band_of,$(1),$(i))))
-method_cmd_of = $(strip $(SIPROJECT) $(call inputs_of,$(1)) $(if $(filter 1,$(TILES)),,--bands) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(SIFLAGS))
-summary_of = $(OUT)/$(1)/summary.txt
+inputs_of = $(if $(filter 1,$(TILES))$(SAMPLES_TAG),$(call render_of,$(1)),$(foreach i,$(band_indices),$(call band_of,$(1),$(i))))
+method_cmd_of = $(strip $(SIPROJECT) $(call inputs_of,$(1)) $(if $(filter 1,$(TILES))$(SAMPLES_TAG),,--bands) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(SIFLAGS))
+summary_of = $(call dir_of,$(1))/summary.txt
 
 # $(call band_rules,SCENE,I,Y0,Y1): band I, render rows [Y0, Y1): POV-Ray
 # renders the full frame with only those rows traced (+SR/+ER count rows
@@ -206,54 +238,89 @@ $(call band_of,$(1),$(2)): $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_
 	rm -f $$$$t-frame.exr && mv -f $$$$t.exr $$@ || { rc=$$$$?; rm -f $$$$t-frame.exr $$$$t.exr; exit $$$$rc; }
 endef
 
+# Mesh bands (SAMPLES not regular): band I of MESH_BANDS holds the pattern's
+# grid rows [I MESH_ROWS, (I + 1) MESH_ROWS), at most MESH_RAYS rays. Its
+# scene (sirays mesh: the scene with a mesh camera) is written, rendered and
+# removed in one recipe, so the disk holds only the scenes of the bands in
+# flight. POV-Ray 3.7.0 repeats the first face row (FS#254, fixed in 3.7.1):
+# there each band renders one row more and sirays assemble --row-bug drops it.
+POVRAY_ROW_BUG := $(if $(SAMPLES_TAG),$(shell povray --version 2>&1 | grep -q 'POV-Ray 3\.7\.0' && echo 1))
+MESH_ROWS := $(shell echo $$(( $(MESH_RAYS) / $(RENDER_W) > 0 ? $(MESH_RAYS) / $(RENDER_W) : 1 )))
+MESH_BANDS := $(shell echo $$(( ( $(RENDER_H) + $(MESH_ROWS) - 1 ) / $(MESH_ROWS) )))
+mesh_indices := $(shell seq 0 $$(( $(MESH_BANDS) - 1 )))
+mesh_band_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG)-mesh$(2)of$(MESH_BANDS).exr
+mesh_y1 = $(shell echo $$(( ( $(1) + 1 ) * $(MESH_ROWS) < $(RENDER_H) ? ( $(1) + 1 ) * $(MESH_ROWS) : $(RENDER_H) )))
+PATTERN_OPTS := --pattern $(SAMPLES) --seed $(SEED) --size $(RES_W)x$(RES_H) --factor $(FACTOR)
+
+# $(call mesh_rules,SCENE,I,Y0,Y1)
+define mesh_rules
+$(call mesh_band_of,$(1),$(2)): $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) $(SIRAYS) | $(if $(PREBUILT),,setup)
+	@printf 'render   %-10s %s rays, band %s of %s: rows %s to %s of %s x %s\n' $(1) $(SAMPLES) $(2) $(MESH_BANDS) $(3) $$$$(( $(4) - 1 )) $(RENDER_W) $(RENDER_H)
+	@t=$$(dir $$@).$$(notdir $$@).tmp; \
+	$(SIRAYS) mesh $$< -o $$$$t.pov $(PATTERN_OPTS) --rows $(3):$(4) && \
+	RENDER_MESH_CAMERA=1 bash scripts/render.sh $$$$t.pov $$$$t.exr $(RENDER_W) $$$$(( $(4) - $(3) $(if $(POVRAY_ROW_BUG),+ 1) )) $(call render_opts_of,$(1)) && \
+	rm -f $$$$t.pov && mv -f $$$$t.exr $$@ || { rc=$$$$?; rm -f $$$$t.pov $$$$t.exr; exit $$$$rc; }
+endef
+
 # $(call scene_rules,SCENE)
 define scene_rules
 $(call render_stamp_of,$(1)): FORCE
 	$$(call stamp,$$@,$(RENDER_W) $(RENDER_H) $(call render_opts_of,$(1)))
 
+ifeq ($(SAMPLES_TAG),)
 $(call render_of,$(1)): $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) | $(if $(PREBUILT),,setup)
 	@printf 'render   %-10s %s x %s (%s x %s, factor %s) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(RES_W) $(RES_H) $(FACTOR) $$@
 	@bash scripts/render.sh $$< $$@ $(RENDER_W) $(RENDER_H) $(call render_opts_of,$(1))
+else
+$(call render_of,$(1)): $(foreach i,$(mesh_indices),$(call mesh_band_of,$(1),$(i))) $(SIRAYS)
+	@printf 'assemble %-10s %s x %s %s rays (seed %s, %s bands) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(SAMPLES) $(SEED) $(MESH_BANDS) $$@
+	@$(SIRAYS) assemble $(foreach i,$(mesh_indices),$(call mesh_band_of,$(1),$(i))) -o $$@ $(PATTERN_OPTS) $(if $(POVRAY_ROW_BUG),--row-bug)
+endif
 
-$(OUT)/$(1)/.summary.cmd: FORCE
+$(call dir_of,$(1))/.summary.cmd: FORCE
 	$$(call stamp,$$@,$(METHODS) | $(CUTOFFS) | $(call render_of,$(1)))
 
-$(OUT)/$(1)/summary.txt $(OUT)/$(1)/summary.csv &: $(foreach m,$(METHODS),$(OUT)/$(1)/$(m).exr) scripts/summary.sh $(wildcard $(SIMETRICS)) $(OUT)/$(1)/.summary.cmd
-	@bash scripts/summary.sh --dir $(OUT)/$(1) --render $(call render_of,$(1)) \
+$(call dir_of,$(1))/summary.txt $(call dir_of,$(1))/summary.csv &: $(foreach m,$(METHODS),$(call dir_of,$(1))/$(m).exr) scripts/summary.sh $(wildcard $(SIMETRICS)) $(call dir_of,$(1))/.summary.cmd
+	@bash scripts/summary.sh --dir $(call dir_of,$(1)) --render $(call render_of,$(1)) \
 	  --sizes '$(RES_W) $(RES_H) $(RENDER_W) $(RENDER_H)' --simetrics '$(SIMETRICS)' --cutoffs '$(CUTOFFS)' $(METHODS)
 
 # The page of the scene's images side by side, two enlarged crops each, and the summary.
-$(OUT)/$(1)/index.html: $(foreach m,$(METHODS),$(OUT)/$(1)/$(m).png) $(OUT)/$(1)/summary.txt scripts/scene_page.py
-	@$$(PYTHON) scripts/scene_page.py $(OUT)/$(1) $(foreach m,$(METHODS),'$(m)=$(METHOD_OPTS_$(m))')
+$(call dir_of,$(1))/index.html: $(foreach m,$(METHODS),$(call dir_of,$(1))/$(m).png) $(call dir_of,$(1))/summary.txt scripts/scene_page.py
+	@$$(PYTHON) scripts/scene_page.py $(call dir_of,$(1)) $(foreach m,$(METHODS),'$(m)=$(METHOD_OPTS_$(m))')
 endef
 
 # $(call method_rules,SCENE,METHOD): METHOD.exr (float, for the measures), .png (8-bit sRGB) and
 # .log (siproject -v: the stage times) from one render; written to temporary
 # names and renamed when both runs succeeded.
 define method_rules
-$(OUT)/$(1)/.$(2).cmd: FORCE
+$(call dir_of,$(1))/.$(2).cmd: FORCE
 	$$(call stamp,$$@,$(call method_cmd_of,$(1),$(2)))
 
-$(OUT)/$(1)/$(2).exr $(OUT)/$(1)/$(2).png $(OUT)/$(1)/$(2).log &: $(call inputs_of,$(1)) $(SIPROJECT) $(OUT)/$(1)/.$(2).cmd
-	@t=$(OUT)/$(1)/.$(2).tmp; \
+$(call dir_of,$(1))/$(2).exr $(call dir_of,$(1))/$(2).png $(call dir_of,$(1))/$(2).log &: $(call inputs_of,$(1)) $(SIPROJECT) $(call dir_of,$(1))/.$(2).cmd
+	@t=$(call dir_of,$(1))/.$(2).tmp; \
 	$(call method_cmd_of,$(1),$(2)) -o $$$$t.exr -d float -v 2>$$$$t.log && \
 	$(call method_cmd_of,$(1),$(2)) -o $$$$t.png -q || \
 	{ rc=$$$$?; cat $$$$t.log >&2; rm -f $$$$t.exr $$$$t.png $$$$t.log; exit $$$$rc; }; \
-	mv -f $$$$t.exr $(OUT)/$(1)/$(2).exr && mv -f $$$$t.png $(OUT)/$(1)/$(2).png && mv -f $$$$t.log $(OUT)/$(1)/$(2).log && \
-	printf 'project  %-10s %-13s %s s\n' $(1) $(2) "$$$$(sed -n 's/.*total \([0-9.]*\) s.*/\1/p' $(OUT)/$(1)/$(2).log)"
+	mv -f $$$$t.exr $(call dir_of,$(1))/$(2).exr && mv -f $$$$t.png $(call dir_of,$(1))/$(2).png && mv -f $$$$t.log $(call dir_of,$(1))/$(2).log && \
+	printf 'project  %-10s %-13s %s s\n' $(1) $(2) "$$$$(sed -n 's/.*total \([0-9.]*\) s.*/\1/p' $(call dir_of,$(1))/$(2).log)"
 endef
 
 $(foreach s,$(ALL_SCENES),$(foreach i,$(band_indices),$(eval $(call band_rules,$(s),$(i),$(call band_y0,$(i)),$(call band_y0,$(i) + 1)))))
+$(if $(SAMPLES_TAG),$(foreach s,$(ALL_SCENES),$(foreach i,$(mesh_indices),$(eval $(call mesh_rules,$(s),$(i),$(shell echo $$(( $(i) * $(MESH_ROWS) ))),$(call mesh_y1,$(i)))))))
 $(foreach s,$(ALL_SCENES),$(eval $(call scene_rules,$(s)))$(foreach m,$(METHODS),$(eval $(call method_rules,$(s),$(m)))))
+
+# The render alone, as a make target: make render SCENE=... SAMPLES=...
+.PHONY: render
+render: $(call render_of,$(SCENE))
 
 # Without SIPROJECT given, set up and build first (the build brings the
 # default binaries up to date; images depend on them).
-scene: $(if $(PREBUILT),,build) $(call summary_of,$(SCENE)) $(OUT)/$(SCENE)/index.html
+scene: $(if $(PREBUILT),,build) $(call summary_of,$(SCENE)) $(call dir_of,$(SCENE))/index.html
 	@echo
 	@cat $(call summary_of,$(SCENE))
-	@echo "The images side by side: $(OUT)/$(SCENE)/index.html"
+	@echo "The images side by side: $(call dir_of,$(SCENE))/index.html"
 
-all-scenes: $(if $(PREBUILT),,build) $(foreach s,$(ALL_SCENES),$(call summary_of,$(s)) $(OUT)/$(s)/index.html)
+all-scenes: $(if $(PREBUILT),,build) $(foreach s,$(ALL_SCENES),$(call summary_of,$(s)) $(call dir_of,$(s))/index.html)
 	@for f in $(filter %/summary.txt,$^); do echo; cat "$$f"; done
 
 endif
@@ -321,6 +388,43 @@ compare-hex: $(if $(PREBUILT),,build)
 	@$(PYTHON) scripts/compare_hex.py --work $(OUT)/compare-hex$(if $(QUICK),-quick) \
 	  --report $(OUT)/$(if $(QUICK),report-quick,report)/hex \
 	  $(if $(QUICK),--res 64 --factors "2 4" --ref-factor 8 --spp 8 --border 8)
+# make compare-samples [QUICK=1]: the sample patterns compared
+# (scripts/compare_samples.py): every scene, pattern, density and seed
+# rendered as make's render targets (make render SAMPLES=... in
+# $(CS_WORK)), each method's L2 error against the truth, its displayed
+# image's error, the high-pass share, their spread across seeds. Report:
+# $(OUT)/report/samples/ (QUICK: $(OUT)/report-quick/samples/, 64 x 64,
+# 4 and 16 rays per pixel, 2 seeds, three scenes).
+ifneq ($(QUICK),)
+CS_SCENES    ?= checker edges zoneplate
+CS_RES       ?= 64
+CS_FACTORS   ?= 2 4
+CS_SEEDS     ?= 0 1
+CS_REF_FACTOR ?= 8
+else
+CS_SCENES    ?= checker objects edges zoneplate
+CS_RES       ?= 256
+CS_FACTORS   ?= 1.41421356 2 2.82842712 4
+CS_SEEDS     ?= 0 1 2 3
+CS_REF_FACTOR ?= 32
+endif
+CS_WORK ?= $(OUT)/compare-samples$(if $(QUICK),-quick)
+CS_MAKE = $(MAKE) --no-print-directory SIPROJECT=$(SIPROJECT) SIMETRICS=$(SIMETRICS) SIRAYS=$(SIRAYS) \
+  OUT=$(CS_WORK) RES=$(CS_RES) ZP_NYQUIST=$(ZP_NYQUIST)
+.PHONY: compare-samples
+compare-samples: $(if $(PREBUILT),,build)
+	@set -e; for s in $(CS_SCENES); do \
+	  [ $$s = zoneplate ] || $(CS_MAKE) SCENE=$$s FACTOR=$(CS_REF_FACTOR) render; \
+	  for f in $(CS_FACTORS); do \
+	    $(CS_MAKE) SCENE=$$s FACTOR=$$f render; \
+	    for p in jitter sobol; do for k in $(CS_SEEDS); do \
+	      $(CS_MAKE) -j$(JOBS) SCENE=$$s FACTOR=$$f SAMPLES=$$p SEED=$$k render; \
+	    done; done; \
+	  done; \
+	done
+	@$(PYTHON) scripts/compare_samples.py --work $(CS_WORK) --report $(OUT)/$(if $(QUICK),report-quick,report)/samples \
+	  --scenes '$(CS_SCENES)' --res $(CS_RES) --factors '$(CS_FACTORS)' --seeds '$(CS_SEEDS)' \
+	  --ref-factor $(CS_REF_FACTOR) --zp-nyquist $(ZP_NYQUIST)
 # ==== end of comparison ========================================================
 
 # ---- bench: siproject against oiiotool, splineops and the decode floor ---------

@@ -6,6 +6,8 @@
 # (docs/design.md sections 2 and 9). Settings come from scenes/povray.ini (through
 # POVINI); extra options are passed last and override them, e.g.
 #   scripts/render.sh scenes/zoneplate.pov out/zp.exr 256 256 Declare=ZP_K=201.06
+# RENDER_MESH_CAMERA=1: SCENE.pov is a mesh band of sirays mesh; its two
+# expected warnings are not shown.
 #
 # Quiet on success (only scene warnings and #debug output, on stderr).
 # POV-Ray writes to a temporary name in OUT's folder, renamed to OUT only on
@@ -87,7 +89,10 @@ log=$work/povray.log
 
 # Strip the start-up banner (the Unix front end prints it whatever the stream
 # settings) and the section markers; what remains is warnings, #debug output
-# and errors.
+# and errors. With RENDER_MESH_CAMERA=1 (a band of sirays mesh, which
+# includes the scene and replaces its camera by a mesh camera) also the two
+# warnings every such band gets: more than one camera, and the mesh camera
+# being an experimental feature.
 filter_log() {
   awk '
     /^Persistence of Vision\(tm\) Ray Tracer Version/ { banner = 1 }
@@ -97,14 +102,34 @@ filter_log() {
     /^==== \[[A-Za-z ]+\.\.\.\] =+$/ { next }
     /^POV-Ray finished$/ { next }
     { print }
-  ' "$log" | sed -e '/./,$!d'
+  ' "$log" | sed -e '/./,$!d' | if [ "${RENDER_MESH_CAMERA:-0}" = 1 ]; then
+    # POV-Ray wraps a message at 80 columns, its continuation lines indented:
+    # each message is taken whole, and the two expected ones dropped.
+    awk '
+      function flush() {
+        m = msg
+        gsub(/\n /, " ", m)
+        if (m ~ /[^ \n]/ && m !~ /More than one camera/ && m !~ /experimental feature\(s\): mesh/)
+          printf "%s", msg
+        msg = ""
+      }
+      { sub(/.*\r/, "") }  # a progress line ended by a carriage return
+      /^ / && msg != "" { msg = msg $0 "\n"; next }
+      { flush(); msg = $0 "\n" }
+      END { flush() }
+    '
+  else cat; fi
 }
 
+# A mesh band is named by its file name alone, from its folder, so that
+# POV-Ray's messages about it wrap between words.
+input=$scene run_dir=$PWD
+if [ "${RENDER_MESH_CAMERA:-0}" = 1 ]; then input=${scene##*/} run_dir=$scene_dir; fi
 set +e
-HOME=$work/home POVINI=$ini povray \
-  +I"\"$scene\"" +O"\"$tmp\"" +W"$width" +H"$height" \
+( cd -- "$run_dir" && HOME=$work/home POVINI=$ini exec povray \
+  +I"\"$input\"" +O"\"$tmp\"" +W"$width" +H"$height" \
   -A +FE -D -P +MI"$mi" +L"\"$scene_dir\"" \
-  "$@" >"$log" 2>&1 </dev/null &
+  "$@" ) >"$log" 2>&1 </dev/null &
 pid=$!
 wait "$pid"
 rc=$?

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <thread>
 
 #include "sis/engine.h"
 
@@ -60,7 +61,7 @@ ScatteredInput scattered_input(const SampleView& values, const double* positions
 bool is_scattered_file(const ImageReader& reader) {
   for (const std::string& n : reader.channel_names())
     if (n == kPositionChannelX || n == kPositionChannelY) return true;
-  return false;
+  return has_pattern_metadata(reader);
 }
 
 ScatteredLayout scattered_layout(const ImageReader& r) {
@@ -77,7 +78,13 @@ ScatteredLayout scattered_layout(const ImageReader& r) {
     }
   }
   const std::string& path = r.path();
-  if (l.x < 0 || l.y < 0)
+  if (has_pattern_metadata(r)) {
+    if (l.x >= 0 || l.y >= 0)
+      throw InputError(path + ": has both a position channel (" +
+                       (l.x >= 0 ? kPositionChannelX : kPositionChannelY) + ") and a sample pattern (" +
+                       kPatternKey + "): the positions are one or the other");
+    l.pattern = read_pattern_metadata(r);
+  } else if (l.x < 0 || l.y < 0)
     throw InputError(path + ": has the position channel " +
                      (l.x < 0 ? kPositionChannelY : kPositionChannelX) + " but not " +
                      (l.x < 0 ? kPositionChannelX : kPositionChannelY) +
@@ -120,7 +127,9 @@ ScatteredInput read_scattered(const std::string& path, const std::optional<Trans
   in.label = fs::path(path).filename().string();
   in.channel_names = l.names;
   in.alpha = l.alpha;
-  in.positions_name = path + ": " + kPositionChannelX + ", " + kPositionChannelY;
+  in.positions_name = l.pattern ? path + ": its pattern " + pattern_name(l.pattern->kind)
+                               : path + ": " + kPositionChannelX + ", " + kPositionChannelY;
+  in.pattern = l.pattern;
   in.values_name = path;
   in.weights_name = path + ": " + kWeightChannel;
   in.grid_width = w;
@@ -132,6 +141,8 @@ ScatteredInput read_scattered(const std::string& path, const std::optional<Trans
   ScatteredSamples& s = in.samples;
   s.channels = C;
   s.positions.resize(2 * n);
+  if (l.pattern) sample_positions(*l.pattern, 0, long(n), s.positions.data(),
+                                    int(std::max(1u, std::thread::hardware_concurrency())));
   s.values.resize(n * C);
   if (l.weight >= 0) s.weights.resize(n);
   const long strip = std::max(1L, r.preferred_strip());
@@ -144,8 +155,10 @@ ScatteredInput read_scattered(const std::string& path, const std::optional<Trans
       const std::size_t i0 = std::size_t(y) * w;
       for (long x = 0; x < w; ++x) {
         const float* q = p + std::size_t(x) * all;
-        s.positions[2 * (i0 + x)] = q[l.x];
-        s.positions[2 * (i0 + x) + 1] = q[l.y];
+        if (!l.pattern) {
+          s.positions[2 * (i0 + x)] = q[l.x];
+          s.positions[2 * (i0 + x) + 1] = q[l.y];
+        }
         if (l.weight >= 0) s.weights[i0 + x] = q[l.weight];
         for (int c = 0; c < C; ++c) v[std::size_t(x) * C + c] = q[l.values[c]];
       }

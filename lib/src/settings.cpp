@@ -353,12 +353,23 @@ void check_scattered(ScatteredInput& in, double W, double H, bool zero_nonfinite
 }  // namespace
 
 Formed form_scattered(const Settings& o, const Resolved& r, ScatteredInput in, const FormRequest& fr) {
+  std::pair<long, long> f_size;
   const std::string& label = in.label;
-  if (o.factor || o.scale)
+  if (in.pattern) {
+    // a pattern's render: its grid is the input's size (--factor, --scale,
+    // --size of any spelling, as a grid's), the positions scaled onto the output
+    std::tie(f_size.first, f_size.second) =
+        output_size(o, r, in.pattern->grid_width(), in.pattern->grid_height());
+    const double sx = double(f_size.first) / double(in.pattern->width),
+                 sy = double(f_size.second) / double(in.pattern->height);
+    if (sx != 1 || sy != 1)
+      for (std::size_t q = 0; q < in.samples.positions.size(); q += 2)
+        in.samples.positions[q] *= sx, in.samples.positions[q + 1] *= sy;
+  } else if (o.factor || o.scale)
     throw RequestError(std::string(o.factor ? "--factor" : "--scale") + ": " + label +
                        ": scattered samples have no grid to divide or scale; give the frame with "
                        "--size WxH (output pixels, the positions' coordinates)");
-  if (!r.size.given() || !r.size.width || !r.size.height)
+  else if (!r.size.given() || !r.size.width || !r.size.height)
     throw RequestError((o.size.empty() ? std::string("--size") : "--size " + o.size) + ": " + label +
                        ": scattered samples need the frame as --size WxH in pixels (the "
                        "positions' coordinates; no side from an aspect or a percentage)");
@@ -376,8 +387,8 @@ Formed form_scattered(const Settings& o, const Resolved& r, ScatteredInput in, c
                        "normalised)");
   Formed f;
   const int threads = r.threads;
-  f.width = r.size.width;
-  f.height = r.size.height;
+  f.width = in.pattern ? f_size.first : r.size.width;
+  f.height = in.pattern ? f_size.second : r.size.height;
   const int C = in.samples.channels;
   if (C < 1) throw InputError(label + ": no value channel");
   const long n = in.samples.count();

@@ -26,6 +26,7 @@
 #include "sis/metrics.h"
 #include "sis/parallel.h"
 #include "sis/partial.h"
+#include "sis/pattern.h"
 #include "sis/scattered_input.h"
 #include "sis/settings.h"
 #include "sis/space.h"
@@ -682,6 +683,20 @@ PYBIND11_MODULE(_core, m) {
     return translated(false, [&] { return band_cuts(rows, parts); });
   });
   m.attr("band_rows") = kBandRows;
+  m.def("_sample_positions", [](const std::string& pattern, std::uint64_t seed, long width, long height,
+                                double factor, int threads) {
+    const SamplePattern p = translated(false, [&] {
+      return make_pattern(parse_pattern(pattern), seed, width, height, factor);
+    });
+    py::array_t<double> out({py::ssize_t(p.count()), py::ssize_t(2)});
+    double* xy = out.mutable_data();
+    {
+      py::gil_scoped_release release;
+      sample_positions(p, 0, p.count(), xy,
+                       threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency())));
+    }
+    return out;
+  });
   m.def("_load", &load_file);
   m.def("_highpass_shares", [](FloatArray a, std::vector<double> cutoffs) {
     const ImageView im = view_of(a, "highpass_share()");

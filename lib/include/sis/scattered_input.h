@@ -6,12 +6,17 @@
 // any layout: pFilm.x and pFilm.y give its place in frame coordinates
 // (output pixels; pbrt's CameraSample::pFilm, the film position), an
 // optional "weight" channel the area it stands for (output pixels^2), the
-// other channels are its values.
+// other channels are its values. A render of a sample pattern
+// (sis/pattern.h) has no position channels: its metadata names the pattern
+// (sis:pattern, sis:pattern_seed, sis:pattern_frame, sis:pattern_factor),
+// and pixel (i, l) of its data window is sample l * width + i, whose
+// position the pattern gives.
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "sis/imageio.h"
+#include "sis/pattern.h"
 #include "sis/scattered.h"
 
 namespace sis {
@@ -35,6 +40,9 @@ struct ScatteredInput {
   std::string positions_name = "positions", values_name = "values", weights_name = "weights";
   long grid_width = 0, grid_x = 0, grid_y = 0;
   std::string sample_name(long i) const;
+  // A pattern's render: the pattern, whose frame the positions are in (the
+  // output frame may differ: form_scattered scales them onto it).
+  std::optional<SamplePattern> pattern;
 };
 
 // Values (count x 1 samples of C channels: float, half, uint8 or uint16,
@@ -45,13 +53,18 @@ struct ScatteredInput {
 ScatteredInput scattered_input(const SampleView& values, const double* positions,
                                const double* weights, const std::optional<Transfer>& transfer);
 
-// True when the file has a position channel (pFilm.x or pFilm.y).
+// True when the file has a position channel (pFilm.x or pFilm.y) or names
+// a sample pattern in its metadata.
 bool is_scattered_file(const ImageReader& reader);
 // The value channels of such a file (every channel but the position and
 // weight channels) and their alpha; InputError naming the file when a
 // position channel is missing or not stored as float or half.
+// A pattern's render: InputError naming the file for pattern metadata
+// missing a key, naming an unknown pattern, or inconsistent with the file's
+// size (read_pattern_metadata), and for position channels beside it.
 struct ScatteredLayout {
-  int x = -1, y = -1, weight = -1;  // channel indices
+  int x = -1, y = -1, weight = -1;  // channel indices (x, y: -1 for a pattern's render)
+  std::optional<SamplePattern> pattern;
   std::vector<int> values;
   std::vector<std::string> names;
   int alpha = -1;

@@ -45,6 +45,7 @@ __all__ = [
     "partial",
     "merge",
     "band_cuts",
+    "sample_positions",
     "Coefficients",
     "highpass_share",
     "rms_difference",
@@ -82,6 +83,7 @@ _TAKES = {
     "prefilter": '"fft" or "recursive"',
     "clamp": '"none", "zero" or "local"',
     "rule": '"fit", "normalised" or "plain"',
+    "pattern": '"regular", "jitter" or "sobol"',
 }
 _INT_RANGE = (-2 ** 31, 2 ** 31 - 1)  # the engine's int
 _LONG_RANGE = (-2 ** 63, 2 ** 63 - 1)
@@ -482,6 +484,35 @@ def band_cuts(rows: int, parts: int) -> list:
     """Where to cut a grid of `rows` rows into `parts` runs of whole bands
     (siproject --band-cuts): the parts' first rows, then `rows`."""
     return list(_core._band_cuts(_whole("rows", rows, _LONG_RANGE), _whole("parts", parts, _LONG_RANGE)))
+
+
+def sample_positions(pattern: str = "regular", *, seed: int = 0, size: Size,
+                     rays_per_pixel: float, threads: int = 0) -> np.ndarray:
+    """The positions of a sample pattern's rays, as the pipeline traces them
+    (make SAMPLES=...) and siproject reads them from a render's metadata: an
+    (N, 2) float64 array of (x, y) in output pixels, row by row of the
+    pattern's grid (sample l * gw + i is pixel (i, l) of the render).
+
+    pattern: "regular" (the pixel centres of the supersampled render),
+    "jitter" (one uniform sample in each cell of its grid) or "sobol"
+    (Owen-scrambled Sobol' points over the frame); seed: which scramble or
+    jitter (the regular grid has none); size: the frame, N, (width, height)
+    or "WxH"; rays_per_pixel: any positive number; the grid is
+    floor(W f + 1/2) x floor(H f + 1/2) for f = sqrt(rays_per_pixel).
+    """
+    name = _text("pattern", pattern)
+    s = _whole("seed", seed, (0, 2**64 - 1))
+    text = _size(size)
+    if not text:
+        raise ValueError("size: the frame is needed, N, (width, height) or \"WxH\"")
+    try:
+        w, h = (int(v) for v in text.split("x"))
+    except ValueError:
+        raise ValueError(f"size={size!r}: expected N, (width, height) or \"WxH\"") from None
+    r = _number("rays_per_pixel", rays_per_pixel)
+    if not r > 0 or r != r or r == float("inf"):
+        raise ValueError(f"rays_per_pixel={r}: not a positive number")
+    return _core._sample_positions(name, s, w, h, float(np.sqrt(r)), _threads(threads))
 
 
 def _path(name: str, path) -> str:
