@@ -413,8 +413,8 @@ TEST_P(Conformance, PartialsInAnyOrderMergeToTheSingleRunsBits) {
 // kinks. Smaller still: the reference's own quadrature across the kinks
 // (cells of 1/12 pixel, 3 x 3 points, on a residual of size 1e-2), the
 // float samples (6e-8) and the hexagonal seam (below 1e-7).
-// Bound: 1e-4 of int |phi_m|, where a 1 % error in the coefficients (or a
-// missing prefilter) leaves some 1e-2 of it.
+// Bound: 1e-4 of int |phi_m|, where a 1 % error in half the coefficients
+// leaves some 2e-3 of it (f is about 0.5), and a missing prefilter more.
 TEST_P(Conformance, MinErrorResidualIsOrthogonalToTheSpace) {
   const Case& c = GetParam();
   if (!takes(c.space, Method::MinError)) GTEST_SKIP() << c.name << " has no min-error method";
