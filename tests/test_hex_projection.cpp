@@ -1,8 +1,9 @@
 // The hexagonal lattice end to end in the library (docs/design.md section 7):
 // lattice and layout, acquisition against a slow direct sum and exact
 // inner products, polynomial reproduction, approximation order, the seam of
-// the periodic grid, flat areas at any sampling, and the display modes
-// against direct evaluation.
+// the periodic grid, the noise gain. What every space must do (flat areas at
+// any sampling, the display modes against direct evaluation, the pixel
+// average) is tested once for all in tests/test_space_conformance.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -464,28 +465,6 @@ TEST(HexProjection, SeamEffectBelowFloatResolution) {
   }
 }
 
-TEST(HexProjection, FlatAreasExactAtAnySampling) {
-  // Square samples never line up with the lattice; the plain sum over them
-  // ripples on a flat image (the hat by 2e-2 at factor 4). The aligned rule
-  // is exact for constants: rounding only, in the interior and near the
-  // edges (the mirror-extended constant is a constant), at integer and
-  // non-integer factors.
-  for (const double s : {3.0, 4.0, 3.3}) {
-    const long W = 40, H = 34, win = std::lround(W * s), hin = std::lround(H * s);
-    Grid<double> in(win, hin, 1);
-    for (double& v : in.data) v = 0.75;
-    for (int n = 1; n <= kMaxBoxSplineOrder; ++n) {
-      const Coefficients k = project_hexagonal(in, double(W), double(H), options(n));
-      double worst = 0;
-      for (int t = 0; t < 400; ++t) {
-        const Vec2 x{W * (0.02 + 0.96 * (t % 20) / 19.0), H * (0.02 + 0.96 * (t / 20) / 19.0)};
-        worst = std::max(worst, std::abs(evaluate(k, x) - 0.75));
-      }
-      EXPECT_LT(worst, 1e-13) << "order " << n << " s " << s;
-    }
-  }
-}
-
 TEST(HexNoise, MeasuredGainIsTheDiscreteOperatorsExactGain) {
   // The seeded measurement (the variance of the centred display inside a
   // 4-pixel border, averaged over K noise images) against hex_noise_gain,
@@ -520,59 +499,6 @@ TEST(HexNoise, MeasuredGainIsTheDiscreteOperatorsExactGain) {
   }
   EXPECT_THROW(hex_noise_gain(2, 0.0, 32, 4, 4), std::invalid_argument);
   EXPECT_THROW(hex_noise_gain(2, 0.05, 16, 4, 4), std::invalid_argument);  // reach beyond the frame
-}
-
-TEST(HexResample, DisplayModesMatchDirectEvaluation) {
-  const long N = 20;
-  const Image in = random_image(N * 3, N * 3, 2, 11);
-  for (int n = 1; n <= kMaxBoxSplineOrder; ++n) {
-    const Coefficients k = project_hexagonal(in, N, N, options(n));
-    const Image centred = resample(k, Display::centred(), N, N);
-    const Image aa = resample(k, Display::antialiased_2x2(), N, N);
-    const Image offs = resample(k, Display::parse("offsets:0.1,-0.2;-0.3,0.05;0.4,0.4"), N, N);
-    const Image bigger = resample(k, Display::centred(), 27, 13);
-    for (long y = 0; y < N; ++y)
-      for (long x = 0; x < N; ++x)
-        for (int c = 0; c < 2; ++c) {
-          EXPECT_NEAR(centred.at(x, y, c), evaluate(k, {x + 0.5, y + 0.5}, c), 1e-5);
-          double e = 0;
-          for (double dy : {-0.25, 0.25})
-            for (double dx : {-0.25, 0.25}) e += evaluate(k, {x + 0.5 + dx, y + 0.5 + dy}, c);
-          EXPECT_NEAR(aa.at(x, y, c), e / 4, 1e-5);
-          const double o = (evaluate(k, {x + 0.6, y + 0.3}, c) +
-                            evaluate(k, {x + 0.2, y + 0.55}, c) +
-                            evaluate(k, {x + 0.9, y + 0.9}, c)) / 3;
-          EXPECT_NEAR(offs.at(x, y, c), o, 1e-5);
-        }
-    for (long y = 0; y < 13; ++y)
-      for (long x = 0; x < 27; ++x)
-        EXPECT_NEAR(bigger.at(x, y, 1),
-                    evaluate(k, {(x + 0.5) * N / 27.0, (y + 0.5) * N / 13.0}, 1), 1e-5);
-    // bit-identical for any thread count
-    EXPECT_EQ(resample(k, Display::pixel(), N, N, 3).data,
-              resample(k, Display::pixel(), N, N, 1).data);
-  }
-}
-
-TEST(HexResample, PixelModeIsThePixelAverage) {
-  // Against a fine midpoint sum of direct evaluations (error ~ (sx/m)^2 times
-  // the curvature of f_app, a few 1e-4 here), at a size other than the frame's.
-  const long N = 12;
-  const Image in = random_image(N * 2, N * 2, 1, 4);
-  for (int n = 1; n <= kMaxBoxSplineOrder; ++n) {
-    const Coefficients k = project_hexagonal(in, N, N, options(n));
-    const Image out = resample(k, Display::pixel(), 5, 7);
-    const double sx = N / 5.0, sy = N / 7.0;
-    for (long y = 0; y < 7; ++y)
-      for (long x = 0; x < 5; ++x) {
-        double s = 0;
-        const int m = 80;
-        for (int j = 0; j < m; ++j)
-          for (int i = 0; i < m; ++i)
-            s += evaluate(k, {(x + (i + 0.5) / m) * sx, (y + (j + 0.5) / m) * sy});
-        EXPECT_NEAR(out.at(x, y, 0), s / (m * m), 2e-3) << n;
-      }
-  }
 }
 
 TEST(HexProjection, DispatchThroughTheCartesianEntryPoints) {

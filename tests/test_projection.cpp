@@ -611,24 +611,6 @@ TEST(Resample, DisplayModesMatchTheirTapsAndDirectEvaluation) {
   EXPECT_THROW(Display::parse("3x3"), std::invalid_argument);
 }
 
-TEST(Resample, PixelModeIsTheExactPixelAverage) {
-  // At another size the pixel mode equals the average of f_app over each
-  // final pixel, here by a fine midpoint sum of direct evaluations.
-  const long N = 12;
-  const Image in = random_image(N * 2, N * 2, 1, 4);
-  const Coefficients k = project_with(in, N, N, Kernel::bspline(2), Method::MinError, Boundary::Mirror);
-  const Image out = resample(k, Display::pixel(), 5, 7);
-  const double sx = N / 5.0, sy = N / 7.0;
-  for (long y = 0; y < 7; ++y)
-    for (long x = 0; x < 5; ++x) {
-      double s = 0;
-      const int m = 60;
-      for (int j = 0; j < m; ++j)
-        for (int i = 0; i < m; ++i) s += evaluate(k, {(x + (i + 0.5) / m) * sx, (y + (j + 0.5) / m) * sy});
-      EXPECT_NEAR(out.at(x, y, 0), s / (m * m), 2e-3);  // midpoint rule error ~ (sx/m)^2
-    }
-}
-
 TEST(Projection, ConventionalFinalImageIsTheFilteredPixels) {
   const Image in = random_image(40, 40, 1, 9);
   const Coefficients k = project_with(in, 10, 10, Kernel::mitchell(), Method::Conventional, Boundary::Mirror);
