@@ -103,8 +103,10 @@ Metadata CartesianSpace::metadata(const Coefficients& k) {
 }
 
 void HexagonalSpace::check_options(Method method, PrefilterMethod prefilter) const {
-  if (method != Method::MinError) throw RequestError("--lattice hex has the min-error method only");
-  if (prefilter != PrefilterMethod::FFT) throw RequestError("--lattice hex has the fft prefilter only");
+  if (method != Method::MinError)
+    throw RequestError("--method conventional: --lattice hex has the min-error method only");
+  if (prefilter != PrefilterMethod::FFT)
+    throw RequestError("--prefilter recursive: --lattice hex has the fft prefilter only");
 }
 void HexagonalSpace::check(const SpaceRequest& rq) const {
   check_options(rq.method, rq.prefilter);
