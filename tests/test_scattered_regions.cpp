@@ -226,7 +226,7 @@ TEST(ScatteredRegions, FlatImageComesBackExactAcrossTheDensityBoundaryOnTheHexag
 // times its error at the edges, or 1e-12 (double rounding through the
 // prefilter's gain) where that is smaller: exact to rounding for the tent
 // and the hat, within 3e-6 times the edge error for the cubic and 8e-7
-// for the quartic (measured: 4e-7 and 5e-8 of it at most). An effect of the inner edge would show there. Within 2
+// for the quartic (measured: at most 8e-7 and 5e-8 of it). An effect of the inner edge would show there. Within 2
 // pixels of the frame's x edges the error is above 1e-4 (the test can
 // fail).
 struct RampCase {
