@@ -33,8 +33,10 @@ struct Taps {
   static constexpr int M = (P + 1) * (P + 2) / 2;      // monomials w1^a w2^b, a + b <= P
   static constexpr int T = 3 * N * N;                  // pieces per triangle in the hexagon
   int count[2] = {0, 0};
-  int k1[2][T], k2[2][T];
-  double coef[2][T][M];
+  long k1[2][T] = {}, k2[2][T] = {};
+  // coef[upper][q][t]: monomial q's coefficient in tap t (zero past count),
+  // so that the taps' values are one loop over q of T lanes
+  alignas(64) double coef[2][M][T] = {};
 
   explicit Taps(const BoxSpline& B) {
     for (int upper = 0; upper < 2; ++upper)
@@ -51,29 +53,30 @@ struct Taps {
           if (t >= T) throw std::logic_error("hex scattered taps: more pieces than the hexagon holds");
           k1[upper][t] = a1;
           k2[upper][t] = a2;
-          std::copy(c, c + M, coef[upper][t]);
+          for (int r = 0; r < M; ++r) coef[upper][r][t] = c[r];
         }
   }
-  static void mono(double w1, double w2, double* m) {
-    double pa = 1;
-    int q = 0;
-    for (int a = 0; a <= P; ++a, pa *= w1) {
-      double pb = pa;
-      for (int b = 0; a + b <= P; ++b, ++q, pb *= w2) m[q] = pb;
-    }
-  }
-  // The lattice points (m1, m2) and values of the taps at U; returns their count.
-  int operator()(double U1, double U2, long* m1, long* m2, double* v) const {
+  // The taps at lattice coordinates U: their count, the lattice points
+  // (m1, m2) (m = floor(U) - k) and the values M_n(U - m) in v (T lanes).
+  inline __attribute__((always_inline)) int operator()(double U1, double U2, long* m1, long* m2,
+                                                       double* v) const {
     const double f1 = std::floor(U1), f2 = std::floor(U2), w1 = U1 - f1, w2 = U2 - f2;
     const int up = w1 + w2 > 1 ? 1 : 0;
     double m[M];
-    mono(w1, w2, m);
+    {
+      double pa = 1;
+      int q = 0;
+      for (int a = 0; a <= P; ++a, pa *= w1) {
+        double pb = pa;
+        for (int b = 0; a + b <= P; ++b, ++q, pb *= w2) m[q] = pb;
+      }
+    }
+    const double(*c)[T] = coef[up];
+    for (int t = 0; t < T; ++t) v[t] = c[0][t];
+    for (int q = 1; q < M; ++q)
+      for (int t = 0; t < T; ++t) v[t] += c[q][t] * m[q];
     const long F1 = long(f1), F2 = long(f2);
-    for (int t = 0; t < count[up]; ++t) {
-      const double* c = coef[up][t];
-      double s = 0;
-      for (int q = 0; q < M; ++q) s += c[q] * m[q];
-      v[t] = s;
+    for (int t = 0; t < T; ++t) {
       m1[t] = F1 - k1[up][t];
       m2[t] = F2 - k2[up][t];
     }
@@ -142,9 +145,6 @@ struct Imager {
   long count() const { return long(xs.size() * ys.size()); }
 };
 
-double sample_weight(const ScatteredSamples& s, const HexScatteredGrid& g, long i) {
-  return s.weights.empty() ? g.width * g.height / double(s.count()) : s.weights[i];
-}
 
 }  // namespace
 
@@ -194,6 +194,120 @@ long hex_image_count(const HexScatteredGrid& g, const ScatteredSamples& s, HexIm
   return n;
 }
 
+namespace {
+
+// Coefficient rows [r0, r1) of the splat (hex_splat); AA: the values a
+// coefficient when fixed (1..5), else 0.
+template <int N, int AA>
+__attribute__((target_clones("avx512f", "avx2", "default"))) void splat_strip(
+    const Taps<N>& taps, const HexScatteredGrid& g, const ScatteredSamples& s, const double* values,
+    int width, bool per_image, HexImages images, double* acc, int A_rt, long r0, long r1) {
+  constexpr int T = Taps<N>::T;
+  const int A = AA > 0 ? AA : A_rt;
+  const HexLayout& L = g.layout;
+  const long Q = L.columns;
+  const bool wrap = images != HexImages::Grid;
+  const double h = L.step(), hy = L.row_step(), sx = 1.0 / h, sy = 1.0 / hy;
+  const Vec2 o = L.lattice.origin();
+  const long n = s.count();
+  const double w0 = n > 0 ? g.width * g.height / double(n) : 0.0;
+  const double* wts = s.weights.empty() ? nullptr : s.weights.data();
+  Imager im(g, images);
+  double wv_dyn[AA > 0 ? 1 : 64];
+  std::vector<double> wv_big(AA > 0 || A <= 64 ? 0 : A);
+  alignas(64) double wv_fixed[AA > 0 ? AA : 1];
+  double* wv = AA > 0 ? wv_fixed : (A <= 64 ? wv_dyn : wv_big.data());
+  long m1[T], m2[T];
+  alignas(64) double tv[T];
+  long image = 0;
+  for (long i = 0; i < n; ++i) {
+    im.of(s.positions[2 * i], s.positions[2 * i + 1]);
+    const double w = wts ? wts[i] : w0;
+    for (std::size_t b = 0; b < im.ys.size(); ++b) {
+      const double U2 = (im.ys[b] - o.y) * sy;
+      const long f2 = long(std::floor(U2));
+      // the rows its taps reach: f2 - N + 1 .. f2 + N
+      bool reaches = false;
+      for (long j = f2 - N + 1; j <= f2 + N && !reaches; ++j) {
+        const long jj = wrap ? L.wrap_row(j) : j;
+        reaches = jj >= r0 && jj < r1;
+      }
+      if (!reaches) {
+        image += long(im.xs.size());
+        continue;
+      }
+      for (std::size_t a = 0; a < im.xs.size(); ++a, ++image) {
+        const double* v = values + std::size_t(per_image ? image : i) * width;
+        for (int c = 0; c < width; ++c) wv[c] = w * v[c];
+        if (A > width) wv[width] = w;
+        const double U1 = (im.xs[a] - o.x) * sx - 0.5 * U2;
+        const int k = taps(U1, U2, m1, m2, tv);
+        for (int t = 0; t < k; ++t) {
+          long j = m2[t], col = m1[t] + floor_half(m2[t]);
+          if (wrap) {
+            j = L.wrap_row(j);
+            col = L.wrap_column(col);
+          } else if (col < 0 || col >= Q) {
+            continue;
+          }
+          if (j < r0 || j >= r1) continue;
+          double* out = acc + (std::size_t(j) * Q + col) * A;
+          const double f = tv[t];
+          for (int c = 0; c < A; ++c) out[c] += f * wv[c];
+        }
+      }
+    }
+  }
+}
+
+// f_app at the images of samples [i0, i1), the first at out (C values each).
+template <int N, int CC>
+__attribute__((target_clones("avx512f", "avx2", "default"))) void evaluate_block(
+    const Taps<N>& taps, const HexScatteredGrid& g, const ScatteredSamples& s, const double* coef,
+    int C_rt, HexImages images, double* out, long i0, long i1) {
+  constexpr int T = Taps<N>::T;
+  const int C = CC > 0 ? CC : C_rt;
+  const HexLayout& L = g.layout;
+  const long Q = L.columns;
+  const double h = L.step(), hy = L.row_step(), sx = 1.0 / h, sy = 1.0 / hy;
+  const Vec2 o = L.lattice.origin();
+  Imager im(g, images);
+  long m1[T], m2[T];
+  alignas(64) double tv[T];
+  for (long i = i0; i < i1; ++i) {
+    im.of(s.positions[2 * i], s.positions[2 * i + 1]);
+    for (const double y : im.ys) {
+      const double U2 = (y - o.y) * sy;
+      for (const double x : im.xs) {
+        const double U1 = (x - o.x) * sx - 0.5 * U2;
+        const int k = taps(U1, U2, m1, m2, tv);
+        for (int ch = 0; ch < C; ++ch) out[ch] = 0.0;
+        for (int t = 0; t < k; ++t) {
+          const long j = L.wrap_row(m2[t]), col = L.wrap_column(m1[t] + floor_half(m2[t]));
+          const double* cf = coef + (std::size_t(j) * Q + col) * C;
+          for (int ch = 0; ch < C; ++ch) out[ch] += tv[t] * cf[ch];
+        }
+        out += C;
+      }
+    }
+  }
+}
+
+// f(std::integral_constant<int, A>) for A in 1..5, else with 0.
+template <typename F>
+void with_width(int A, F&& f) {
+  switch (A) {
+    case 1: return f(std::integral_constant<int, 1>{});
+    case 2: return f(std::integral_constant<int, 2>{});
+    case 3: return f(std::integral_constant<int, 3>{});
+    case 4: return f(std::integral_constant<int, 4>{});
+    case 5: return f(std::integral_constant<int, 5>{});
+    default: return f(std::integral_constant<int, 0>{});
+  }
+}
+
+}  // namespace
+
 void hex_splat(const HexScatteredGrid& g, const ScatteredSamples& s, const double* values,
                int width, bool per_image, HexImages images, Grid<double>& acc, int threads) {
   const HexLayout& L = g.layout;
@@ -201,73 +315,24 @@ void hex_splat(const HexScatteredGrid& g, const ScatteredSamples& s, const doubl
   if (acc.width != Q || acc.height != R || (acc.channels != width && acc.channels != width + 1))
     throw std::logic_error("hex_splat(): the sums do not match the grid");
   const int A = acc.channels;
-  const bool wrap = images != HexImages::Grid;
-  const double h = L.step(), hy = L.row_step();
-  const Vec2 o = L.lattice.origin();
-  const long n = s.count();
   with_order(g.spline->order(), [&](auto order) {
     constexpr int N = decltype(order)::value;
-    using TapsN = Taps<N>;
-    const TapsN taps(*g.spline);
-    const long parts = std::max(1L, std::min<long>(threads, R));
-    parallel_for(parts, threads, [&](long p0, long p1) {
-      for (long p = p0; p < p1; ++p) {
-        const long r0 = R * p / parts, r1 = R * (p + 1) / parts;
-        Imager im(g, images);
-        std::vector<double> wv(A);
-        long m1[TapsN::T], m2[TapsN::T];
-        double tv[TapsN::T];
-        long image = 0;
-        for (long i = 0; i < n; ++i) {
-          im.of(s.positions[2 * i], s.positions[2 * i + 1]);
-          const double w = sample_weight(s, g, i);
-          for (std::size_t b = 0; b < im.ys.size(); ++b) {
-            const double U2 = (im.ys[b] - o.y) / hy;
-            const long f2 = long(std::floor(U2));
-            // rows f2 - N + 1 .. f2 + N
-            bool reaches = false;
-            for (long j = f2 - N + 1; j <= f2 + N && !reaches; ++j) {
-              const long jj = wrap ? L.wrap_row(j) : j;
-              reaches = jj >= r0 && jj < r1;
-            }
-            if (!reaches) {
-              image += long(im.xs.size());
-              continue;
-            }
-            for (std::size_t a = 0; a < im.xs.size(); ++a, ++image) {
-              const double* v = values + std::size_t(per_image ? image : i) * width;
-              for (int c = 0; c < width; ++c) wv[c] = w * v[c];
-              if (A > width) wv[width] = w;
-              const double U1 = (im.xs[a] - o.x) / h - 0.5 * U2;
-              const int k = taps(U1, U2, m1, m2, tv);
-              for (int t = 0; t < k; ++t) {
-                long j = m2[t], col = m1[t] + floor_half(m2[t]);
-                if (wrap) {
-                  j = L.wrap_row(j);
-                  col = L.wrap_column(col);
-                } else if (col < 0 || col >= Q) {
-                  continue;
-                }
-                if (j < r0 || j >= r1) continue;
-                double* out = acc.data.data() + (std::size_t(j) * Q + col) * A;
-                const double f = tv[t];
-                for (int c = 0; c < A; ++c) out[c] += f * wv[c];
-              }
-            }
-          }
-        }
-      }
+    const Taps<N> taps(*g.spline);
+    with_width(A, [&](auto a) {
+      constexpr int AA = decltype(a)::value;
+      const long parts = std::max(1L, std::min<long>(threads, R));
+      parallel_for(parts, threads, [&](long p0, long p1) {
+        for (long p = p0; p < p1; ++p)
+          splat_strip<N, AA>(taps, g, s, values, width, per_image, images, acc.data.data(), A,
+                             R * p / parts, R * (p + 1) / parts);
+      });
     });
   });
 }
 
 void hex_evaluate_images(const HexScatteredGrid& g, const ScatteredSamples& s,
                          const Grid<double>& c, HexImages images, double* out, int threads) {
-  const HexLayout& L = g.layout;
-  const long Q = L.columns;
   const int C = c.channels;
-  const double h = L.step(), hy = L.row_step();
-  const Vec2 o = L.lattice.origin();
   const long n = s.count(), blocks = (n + kBlock - 1) / kBlock;
   // where each block's images start
   std::vector<long> first(blocks + 1, 0);
@@ -289,33 +354,14 @@ void hex_evaluate_images(const HexScatteredGrid& g, const ScatteredSamples& s,
   }
   with_order(g.spline->order(), [&](auto order) {
     constexpr int N = decltype(order)::value;
-    using TapsN = Taps<N>;
-    const TapsN taps(*g.spline);
-    parallel_for(blocks, threads, [&](long b0, long b1) {
-      Imager im(g, images);
-      long m1[TapsN::T], m2[TapsN::T];
-      double tv[TapsN::T];
-      std::vector<double> sum(C);
-      for (long b = b0; b < b1; ++b) {
-        long image = first[b];
-        for (long i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
-          im.of(s.positions[2 * i], s.positions[2 * i + 1]);
-          for (const double y : im.ys) {
-            const double U2 = (y - o.y) / hy;
-            for (const double x : im.xs) {
-              const double U1 = (x - o.x) / h - 0.5 * U2;
-              const int k = taps(U1, U2, m1, m2, tv);
-              std::fill(sum.begin(), sum.end(), 0.0);
-              for (int t = 0; t < k; ++t) {
-                const long j = L.wrap_row(m2[t]), col = L.wrap_column(m1[t] + floor_half(m2[t]));
-                const double* cf = c.data.data() + (std::size_t(j) * Q + col) * C;
-                for (int ch = 0; ch < C; ++ch) sum[ch] += tv[t] * cf[ch];
-              }
-              std::copy(sum.begin(), sum.end(), out + std::size_t(image++) * C);
-            }
-          }
-        }
-      }
+    const Taps<N> taps(*g.spline);
+    with_width(C, [&](auto cc) {
+      constexpr int CC = decltype(cc)::value;
+      parallel_for(blocks, threads, [&](long b0, long b1) {
+        for (long b = b0; b < b1; ++b)
+          evaluate_block<N, CC>(taps, g, s, c.data.data(), C, images, out + std::size_t(first[b]) * C,
+                                b * kBlock, std::min(n, (b + 1) * kBlock));
+      });
     });
   });
 }
