@@ -10,8 +10,11 @@
 #include <cstring>
 #include <filesystem>
 
+#include "sis/coefficients.h"
 #include "sis/engine.h"
 #include "sis/imageio.h"
+#include "sis/projection.h"
+#include "sis/range.h"
 #include "support.h"
 
 namespace fs = std::filesystem;
@@ -81,8 +84,8 @@ TEST_F(Engine, FilesAndMemoryGiveSiprojectsBits) {
       rq.threads = 2;
       const Projection p = project(rq);
       EXPECT_TRUE(same_bits(as_floats(p.coefficients.c), want_c)) << c.args << (memory ? " memory" : " file");
-      const FinalImage f = final_image(p.coefficients, c.display, 67, 201, false, Clamp::None,
-                                       p.local_range.get(), 2, "in", p.inputs.channel_names);
+      const FinalImage f =
+          final_image(p.coefficients, c.display, 67, 201, Clamp::None, p.local_range.get(), 2);
       EXPECT_TRUE(same_bits(std::vector<float>(f.image.data.begin(), f.image.data.end()), want))
           << c.args << (memory ? " memory" : " file");
     }
@@ -125,6 +128,65 @@ TEST_F(Engine, MemoryBandsAndReports) {
   EXPECT_THROW(project(rq), InputError);
   rq.inputs = {pa, pc};  // a gap
   EXPECT_THROW(project(rq), InputError);
+}
+
+TEST_F(Engine, CoefficientsDescribeThemselves) {
+  // An 8-bit RGBA PNG written by OpenImageIO (sRGB by default), projected
+  // with highlight compression onto both spaces: the coefficients carry
+  // the channels, alpha, remedy and input; a coefficient file keeps them
+  // (read back, the input is named by the file's path); the final image
+  // needs nothing else: the colour channels expanded, alpha not.
+  const std::string png = path("rgba.png");
+  {
+    std::vector<unsigned char> px(48 * 36 * 4);
+    for (std::size_t q = 0; q < px.size(); ++q) px[q] = static_cast<unsigned char>((q * 37) % 251);
+    OIIO::ImageSpec spec(48, 36, 4, OIIO::TypeDesc::UINT8);
+    auto out = OIIO::ImageOutput::create(png);
+    ASSERT_TRUE(out && out->open(png, spec) && out->write_image(OIIO::TypeDesc::UINT8, px.data()) &&
+                out->close());
+  }
+  for (const Space& space : {Space{CartesianSpace{Kernel::bspline(3)}}, Space{HexagonalSpace{1, 1.0}}}) {
+    const std::string what = space_name(space);
+    ProjectionRequest rq;
+    rq.inputs = {ProjectionInput::file(png)};
+    rq.width = 24;
+    rq.height = 18;
+    rq.space = space;
+    rq.highlight_compress = true;
+    const Projection p = project(rq);
+    const Coefficients& k = p.coefficients;
+    EXPECT_EQ(k.channel_names, (std::vector<std::string>{"R", "G", "B", "A"})) << what;
+    EXPECT_EQ(k.alpha, 3) << what;
+    EXPECT_TRUE(k.highlight_compressed) << what;
+    EXPECT_EQ(k.input.label, "rgba.png") << what;  // as the inputs' label names it
+    EXPECT_FALSE(k.input.half) << what;
+    EXPECT_EQ(k.input.transfer, Transfer::srgb()) << what;
+    EXPECT_EQ(space_name(k.space), what);
+
+    const Display shown = Display::centred();
+    const FinalImage f = final_image(k, shown, 24, 18, Clamp::None, nullptr, 1);
+    const Image plain = final_image(k, shown, 24, 18, 1);  // f_app alone
+    ASSERT_EQ(f.image.data.size(), plain.data.size());
+    for (std::size_t q = 0; q < plain.data.size(); ++q) {
+      const float want = q % 4 == 3 ? plain.data[q] : static_cast<float>(highlight_expand(plain.data[q]));
+      ASSERT_EQ(f.image.data[q], want) << what << ", value " << q;
+    }
+
+    const std::string file = path("c.exr");
+    write_coefficients(file, k);
+    const Coefficients back = load_coefficients(file, false);
+    EXPECT_EQ(back.channel_names, k.channel_names) << what;
+    EXPECT_EQ(back.alpha, 3) << what;
+    EXPECT_TRUE(back.highlight_compressed) << what;
+    EXPECT_EQ(back.input.label, file) << what;
+    EXPECT_EQ(back.input.transfer, Transfer::srgb()) << what;
+    EXPECT_EQ(space_name(back.space), what);
+    EXPECT_EQ(generator_name(back), generator_name(k)) << what;
+    const FinalImage g = final_image(back, shown, 24, 18, Clamp::None, nullptr, 1);
+    EXPECT_TRUE(same_bits(std::vector<float>(g.image.data.begin(), g.image.data.end()),
+                          std::vector<float>(f.image.data.begin(), f.image.data.end())))
+        << what;
+  }
 }
 
 TEST_F(Engine, RequestsItCannotDoAreRequestErrors) {

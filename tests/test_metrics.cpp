@@ -255,7 +255,7 @@ Coefficients random_coefficients(long w, long h, int channels, Kernel g, double 
   std::uniform_real_distribution<double> u(-0.2, 1.2);
   for (double& v : k.c.data) v = u(rng);
   k.lattice = Lattice::cartesian(hx, hy);
-  k.generator = g;
+  k.space = CartesianSpace{g};
   k.boundary = b;
   k.image_width = w * hx;
   k.image_height = h * hy;

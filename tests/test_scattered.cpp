@@ -89,7 +89,7 @@ Coefficients normalised_reference(const ScatteredSamples& s, const ScatteredTarg
   const long W = long(t.width), H = long(t.height);
   Coefficients k;
   k.c = Grid<double>(W, H, s.channels);
-  k.generator = generator_of(t);
+  k.space = t.space;
   k.boundary = t.boundary;
   k.image_width = t.width;
   k.image_height = t.height;
@@ -214,7 +214,7 @@ TEST(Scattered, PlainSumAndConventionalEqualDirectDoubleSums) {
     const auto Phi = design(s, t);
     Coefficients want;
     want.c = Grid<double>(6, 4, 1);
-    want.generator = generator_of(t);
+    want.space = t.space;
     want.boundary = t.boundary;
     for (long n = 0; n < 24; ++n) {
       double num = 0;

@@ -17,10 +17,6 @@
 namespace sis {
 namespace {
 
-const Kernel& generator_of(const ScatteredTarget& t) {
-  return std::get<CartesianSpace>(t.space).generator;
-}
-
 double uniform(std::mt19937_64& g) { return double(g() >> 11) * 0x1p-53; }
 
 constexpr double kW = 24, kH = 16;
@@ -116,7 +112,7 @@ TEST(ScatteredRegions, FitReproducesASplineOfTheSpaceAcrossTheDensityBoundary) {
     Coefficients spline;
     spline.c = Grid<double>(long(kW), long(kH), 1);
     spline.lattice = t.lattice;
-    spline.generator = generator_of(t);
+    spline.space = t.space;
     spline.boundary = t.boundary;
     spline.image_width = kW;
     spline.image_height = kH;

@@ -79,8 +79,10 @@ void expect_own_runs_bits(const std::vector<ProjectionInput>& inputs, int thread
         << what << ", target " << q;
     EXPECT_EQ(p.nonfinite.count, own.nonfinite.count) << what;
     EXPECT_EQ(p.nonfinite.where, own.nonfinite.where) << what;
-    EXPECT_EQ(p.transfer, own.transfer) << what;
-    EXPECT_EQ(p.highlight_compressed, own.highlight_compressed) << what;
+    EXPECT_EQ(p.coefficients.input.transfer, own.coefficients.input.transfer) << what;
+    EXPECT_EQ(p.coefficients.highlight_compressed, own.coefficients.highlight_compressed) << what;
+    EXPECT_EQ(p.coefficients.channel_names, own.coefficients.channel_names) << what;
+    EXPECT_EQ(p.coefficients.input.label, own.coefficients.input.label) << what;
   }
 }
 

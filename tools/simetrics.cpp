@@ -18,7 +18,6 @@
 #include "version.h"
 #include "sis/engine.h"
 #include "sis/imageio.h"
-#include "sis/hex_lattice.h"
 #include "sis/metrics.h"
 
 using namespace sis;

@@ -21,7 +21,6 @@
 #include "cli.h"
 #include "version.h"
 #include "sis/engine.h"
-#include "sis/hex_lattice.h"
 #include "sis/memory.h"
 #include "sis/partial.h"
 #include "sis/projection.h"
@@ -248,8 +247,8 @@ int run(const Options& o) {
     if (!o.quiet) std::cerr << "siproject: warning: " << w << "\n";
   Coefficients& k = f.coefficients;
   const long W = f.width, H = f.height;
-  const bool compressed = f.highlight_compressed;
-  const bool input_half = f.input_half;
+  const bool compressed = k.highlight_compressed;
+  const bool input_half = k.input.half;
   const Clamp clamp = r.clamp;
   if (f.from_coefficient_file && !data_format)
     out_format = default_sample_format(o.output, input_half, 0);
@@ -291,7 +290,7 @@ int run(const Options& o) {
       {"sis:display", shown.name()},
       {"sis:boundary", boundary_name(k.boundary)},
       {"sis:input", input_label},
-      {"sis:input_transfer", f.input_transfer.name()},
+      {"sis:input_transfer", k.input.transfer.name()},
       {"sis:highlight_compress", compressed ? "1" : "0"},
       {"sis:clamp", clamp_name(clamp)},
       {"sis:output_min", std::to_string(after.min)},
@@ -299,7 +298,7 @@ int run(const Options& o) {
       {"sis:negative_before_clamp", std::to_string(before.negative)},
       {"sis:out_of_range_before_clamp",
        own_range ? std::to_string(before.out_of_range) : std::string("unknown")},
-      {"sis:lattice", space_name(space_of(k))},
+      {"sis:lattice", space_name(k.space)},
       {"sis:half_clamped", std::to_string(half_clamped)},
       {"Software", "siproject"},
   };
@@ -307,11 +306,7 @@ int run(const Options& o) {
   // Both outputs are written whole before either replaces a file.
   std::optional<StagedFile> coeffs_file;
   if (!o.coeffs.empty())
-    coeffs_file.emplace(stage_coefficients(o.coeffs, k, names,
-                                           {{"sis:input", md[4].second},
-                                            {"sis:input_format", input_half ? "half" : "float"},
-                                            {"sis:input_transfer", f.input_transfer.name()},
-                                            {"sis:highlight_compress", compressed ? "1" : "0"}}));
+    coeffs_file.emplace(stage_coefficients(o.coeffs, k));
   Buffer<double>().swap(k.c.data);
   WriteOptions how(out_format);
   how.compression = compression;

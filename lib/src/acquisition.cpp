@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "sis/box_spline.h"
+#include "sis/coefficients.h"
 #include "sis/parallel.h"
 
 namespace sis {
@@ -353,7 +354,7 @@ Coefficients Acquisition::finish() {
   Coefficients out;
   out.c = std::move(acc_);
   out.lattice = plan_.lattice();
-  out.generator = plan_.generator();
+  out.space = CartesianSpace{plan_.generator()};
   out.boundary = plan_.boundary();
   out.min_error = plan_.method() == Method::MinError;
   out.image_width = plan_.image_width();

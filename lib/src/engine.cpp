@@ -486,11 +486,20 @@ void report_nonfinite(NonFiniteReport& bad, const std::vector<std::string>& name
   if (stop) throw InputError(bad.where + "; use --nonfinite zero to replace them with 0");
 }
 
-// The acquired sums to coefficients: prefiltered, kept in float where asked,
-// checked for overflow (project and merge).
-Coefficients finish_coefficients(Coefficients k, PrefilterMethod method, int threads,
-                                 bool float_coefficients, const std::string& label,
-                                 const std::vector<std::string>& names, double* seconds) {
+// The acquired sums to coefficients: described (the inputs' channels, the
+// transfer decoded, the highlight compression), prefiltered, kept in float
+// where asked, checked for overflow (project and merge).
+Coefficients finish_coefficients(Coefficients k, const InputSet& in, const Transfer& transfer,
+                                 bool highlight_compressed, PrefilterMethod method, int threads,
+                                 bool float_coefficients, double* seconds) {
+  k.channel_names = in.channel_names;
+  k.alpha = in.alpha;
+  k.highlight_compressed = highlight_compressed;
+  k.input.label = in.label;
+  k.input.half = in.half;
+  k.input.transfer = transfer;
+  const std::string& label = in.label;
+  const std::vector<std::string>& names = in.channel_names;
   const auto t2 = Clock::now();
   prefilter(k, threads, method);
   *seconds = seconds_since(t2);
@@ -509,18 +518,18 @@ Coefficients finish_coefficients(Coefficients k, PrefilterMethod method, int thr
   return k;
 }
 
-// The sample stages the request asks for on these inputs (the transfer
-// decoded and the highlight compression recorded in p).
-SampleStages sample_stages(const ProjectionRequest& rq, const InputSet& in, Projection& p) {
+// The sample stages the request asks for on these inputs, and the transfer
+// they decode.
+SampleStages sample_stages(const ProjectionRequest& rq, const InputSet& in, Transfer* decoded) {
   const int C = in.channels;
   const int alpha = in.alpha;
   // Display-encoded samples (by default integer ones: PNG, JPEG, TIFF...,
   // default_transfer) are decoded to linear light first: the method filters
   // radiance, and an 8-bit output encodes again (a flat 128 stays 128).
   SampleStages stages;
-  p.transfer = rq.input_transfer ? *rq.input_transfer : in.transfer;
-  if (p.transfer.kind != Transfer::Linear)
-    stages.decode = [C, alpha, t = p.transfer](float* v, std::size_t n, std::size_t k0) {
+  *decoded = rq.input_transfer ? *rq.input_transfer : in.transfer;
+  if (decoded->kind != Transfer::Linear)
+    stages.decode = [C, alpha, t = *decoded](float* v, std::size_t n, std::size_t k0) {
       decode_to_linear(t, v, n, C, alpha, k0);
     };
   if (rq.highlight_compress)
@@ -528,7 +537,6 @@ SampleStages sample_stages(const ProjectionRequest& rq, const InputSet& in, Proj
       for (std::size_t q = 0; q < n; ++q)
         if (int((k0 + q) % C) != alpha) v[q] = static_cast<float>(highlight_compress(v[q]));
     };
-  p.highlight_compressed = rq.highlight_compress;
   return stages;
 }
 
@@ -537,8 +545,8 @@ SampleStages sample_stages(const ProjectionRequest& rq, const InputSet& in, Proj
 // while the sink lives.
 template <typename Done>
 void acquire_inputs(const ProjectionRequest& rq, const InputSet& in, const SpaceRequest& srq,
-                    Projection& p, const Done& done) {
-  const SampleStages stages = sample_stages(rq, in, p);
+                    Projection& p, Transfer* decoded, const Done& done) {
+  const SampleStages stages = sample_stages(rq, in, decoded);
   const bool stop = !rq.zero_nonfinite;
   const auto t = Clock::now();
   visit_space(rq.space, [&](const auto& space) {
@@ -576,9 +584,10 @@ Projection project(const ProjectionRequest& rq, InputSet inputs) {
                                          rq.method, rq.prefilter, rq.boundary, threads);
   p.estimated_bytes = check_request(rq.space, srq, rq.coefficient_file);
   Coefficients k;
-  acquire_inputs(rq, in, srq, p, [&](auto& sink) { k = sink.finish(); });
-  p.coefficients = finish_coefficients(std::move(k), rq.prefilter, threads, rq.float_coefficients,
-                                       in.label, in.channel_names, &p.prefilter_seconds);
+  Transfer decoded;
+  acquire_inputs(rq, in, srq, p, &decoded, [&](auto& sink) { k = sink.finish(); });
+  p.coefficients = finish_coefficients(std::move(k), in, decoded, rq.highlight_compress, rq.prefilter,
+                                       threads, rq.float_coefficients, &p.prefilter_seconds);
   return p;
 }
 
@@ -616,11 +625,8 @@ std::vector<Projection> project(const std::vector<ProjectionRequest>& requests) 
     bytes += p[q].estimated_bytes;
   }
   check_memory(bytes, std::to_string(N) + " outputs of one reading");
-  const SampleStages stages = sample_stages(rq, in, p.front());
-  for (Projection& each : p) {
-    each.transfer = p.front().transfer;
-    each.highlight_compressed = p.front().highlight_compressed;
-  }
+  Transfer decoded;
+  const SampleStages stages = sample_stages(rq, in, &decoded);
   // every target's sink, held while the reading feeds them all
   ManySinks many;
   std::vector<std::shared_ptr<void>> held(N);
@@ -651,8 +657,8 @@ std::vector<Projection> project(const std::vector<ProjectionRequest>& requests) 
     p[q].acquire_seconds = acquire_seconds;
     Coefficients k = finish[q]();
     held[q].reset();
-    p[q].coefficients = finish_coefficients(std::move(k), r.prefilter, threads,
-                                            r.float_coefficients, in.label, in.channel_names,
+    p[q].coefficients = finish_coefficients(std::move(k), in, decoded, rq.highlight_compress,
+                                            r.prefilter, threads, r.float_coefficients,
                                             &p[q].prefilter_seconds);
   }
   return p;
@@ -697,7 +703,7 @@ Partial project_partial(const ProjectionRequest& rq, InputSet inputs) {
   }
   Partial out;
   out.space = rq.space;
-  acquire_inputs(rq, in, srq, p, [&](auto& sink) {
+  acquire_inputs(rq, in, srq, p, &out.transfer, [&](auto& sink) {
     const BandPartition& bands = sink.bands();
     if (bands.band_rows() != std::min(kBandRows, std::max(1L, in.height)))
       throw std::logic_error("project_partial(): a sink's bands are not of kBandRows");
@@ -717,8 +723,7 @@ Partial project_partial(const ProjectionRequest& rq, InputSet inputs) {
   out.method = rq.method;
   out.boundary = rq.boundary;
   out.prefilter = rq.prefilter;
-  out.transfer = p.transfer;
-  out.highlight_compressed = p.highlight_compressed;
+  out.highlight_compressed = rq.highlight_compress;
   out.zero_nonfinite = rq.zero_nonfinite;
   out.integer_bits = in.integer_bits;
   out.half = in.half;
@@ -789,8 +794,6 @@ Projection merge(const std::vector<Partial>& parts, int threads, bool float_coef
   in.integer_bits = first.integer_bits;
   for (const Partial& q : parts) in.integer_bits = q.integer_bits ? std::max(in.integer_bits, q.integer_bits) : 0;
   in.label = first.label + (parts.size() > 1 ? " and " + std::to_string(parts.size() - 1) + " more partials" : "");
-  p.transfer = first.transfer;
-  p.highlight_compressed = first.highlight_compressed;
   // the non-finite report: the first in band order, the count of all
   long nonfinite = 0;
   for (long b = 0; b < first.band_count; ++b) {
@@ -821,8 +824,9 @@ Projection merge(const std::vector<Partial>& parts, int threads, bool float_coef
     k = sink->finish();
   });
   p.acquire_seconds = seconds_since(t);
-  p.coefficients = finish_coefficients(std::move(k), first.prefilter, threads, float_coefficients,
-                                       in.label, in.channel_names, &p.prefilter_seconds);
+  p.coefficients = finish_coefficients(std::move(k), in, first.transfer, first.highlight_compressed,
+                                       first.prefilter, threads, float_coefficients,
+                                       &p.prefilter_seconds);
   return p;
 }
 
@@ -834,6 +838,7 @@ Coefficients load_coefficients(const std::string& path, bool zero_nonfinite,
                "a coefficient grid of " + std::to_string(file.width()) + " x " +
                    std::to_string(file.height()) + " x " + std::to_string(file.channels()));
   Coefficients k = read_coefficients(file);
+  k.input.label = path;  // messages name the file the user gave
   const long bad = first_nonfinite(k.c.data.data(), k.c.data.size());
   if (bad >= 0) {
     NonFiniteReport n;
@@ -848,14 +853,17 @@ Coefficients load_coefficients(const std::string& path, bool zero_nonfinite,
   return k;
 }
 
-FinalImage final_image(const Coefficients& k, const Display& display, long W, long H,
-                       bool highlight_expand_, Clamp clamp, const LocalRange* local, int threads,
-                       const std::string& label, const std::vector<std::string>& names, int alpha) {
+FinalImage final_image(const Coefficients& k, const Display& display, long W, long H, Clamp clamp,
+                       const LocalRange* local, int threads) {
+  const std::vector<std::string> names =
+      k.channel_names.empty() ? default_channel_names(k.c.channels) : k.channel_names;
+  const int alpha = k.alpha;
+  const std::string label = k.input.label.empty() ? "the coefficients" : k.input.label;
   FinalImage f;
   f.image = sis::final_image(k, display, W, H, threads);
   Image& image = f.image;
   const int C = image.channels;
-  if (highlight_expand_)
+  if (k.highlight_compressed)
     for (std::size_t q = 0; q < image.data.size(); ++q)
       if (int(q % C) != alpha) image.data[q] = static_cast<float>(highlight_expand(image.data[q]));
   f.own_range = local && local->min().width == W && local->min().height == H;

@@ -442,7 +442,7 @@ Coefficients HexAcquisition::finish() {
   Coefficients out;
   out.c = std::move(acc_);
   out.lattice = plan_.layout().lattice;
-  out.box_spline = &plan_.generator();
+  out.space = HexagonalSpace{plan_.generator().order(), 1.0 / std::abs(out.lattice.determinant())};
   out.boundary = plan_.boundary();
   out.min_error = true;
   out.image_width = plan_.image_width();

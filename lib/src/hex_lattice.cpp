@@ -73,8 +73,10 @@ HexLayout hex_layout(const Coefficients& k) {
 }
 
 const BoxSpline& hex_generator(const Coefficients& k) {
-  if (!k.box_spline) throw std::invalid_argument("hex_generator(): coefficients without a box spline");
-  return *k.box_spline;
+  const auto* hex = std::get_if<HexagonalSpace>(&k.space);
+  if (!hex) throw std::invalid_argument("hex_generator(): coefficients of the " + space_name(k.space) +
+                                        " space have no box spline");
+  return BoxSpline::hexagonal(hex->order);
 }
 
 

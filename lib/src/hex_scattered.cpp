@@ -71,10 +71,18 @@ struct Taps {
         for (int b = 0; a + b <= P; ++b, ++q, pb *= w2) m[q] = pb;
       }
     }
+    // two partial sums (even and odd q), halving the chain of dependent adds
     const double(*c)[T] = coef[up];
-    for (int t = 0; t < T; ++t) v[t] = c[0][t];
-    for (int q = 1; q < M; ++q)
-      for (int t = 0; t < T; ++t) v[t] += c[q][t] * m[q];
+    double odd[T];
+    for (int t = 0; t < T; ++t) v[t] = c[0][t], odd[t] = 0.0;
+    for (int q = 1; q + 1 < M; q += 2)
+      for (int t = 0; t < T; ++t) {
+        odd[t] += c[q][t] * m[q];
+        v[t] += c[q + 1][t] * m[q + 1];
+      }
+    if constexpr (M % 2 == 0)
+      for (int t = 0; t < T; ++t) odd[t] += c[M - 1][t] * m[M - 1];
+    for (int t = 0; t < T; ++t) v[t] += odd[t];
     const long F1 = long(f1), F2 = long(f2);
     for (int t = 0; t < T; ++t) {
       m1[t] = F1 - k1[up][t];
@@ -113,6 +121,13 @@ Window window(const HexScatteredGrid& g, HexImages images) {
 // [lo, hi), increasing k (mirror: x + 2 k E, then -x + 2 k E for each k).
 void axis_images(double x, double E, Boundary b, double lo, double hi, std::vector<double>& out) {
   out.clear();
+  // Most samples: no image but themselves in the window (the nearest
+  // others are -x and 2E - x for mirror, x - E and x + E for periodic).
+  if (x >= lo && x < hi &&
+      (b == Boundary::Mirror ? (-x < lo && 2 * E - x >= hi) : (x - E < lo && x + E >= hi))) {
+    out.push_back(x);
+    return;
+  }
   const double period = b == Boundary::Mirror ? 2 * E : E;
   const long k0 = long(std::floor((lo - E) / period)) - 1, k1 = long(std::ceil((hi + E) / period)) + 1;
   for (long k = k0; k <= k1; ++k) {
@@ -175,7 +190,7 @@ Coefficients hex_scattered_coefficients(const HexScatteredGrid& g, Grid<double> 
   Coefficients k;
   k.c = std::move(c);
   k.lattice = g.layout.lattice;
-  k.box_spline = g.spline;
+  k.space = HexagonalSpace{g.spline->order(), 1.0 / std::abs(k.lattice.determinant())};
   k.boundary = g.boundary;
   k.min_error = true;
   k.image_width = g.width;

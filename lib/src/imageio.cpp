@@ -31,6 +31,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "sis/coefficients.h"
 #include "sis/parallel.h"
 #include "sis/space.h"
 
@@ -1453,9 +1454,19 @@ StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
       {"sis:method", k.min_error ? "min-error" : "conventional"},
       {"sis:image_width", num(k.image_width)},
       {"sis:image_height", num(k.image_height)},
+      // what they are of
+      {"sis:input", k.input.label},
+      {"sis:input_format", k.input.half ? "half" : "float"},
+      {"sis:input_transfer", k.input.transfer.name()},
+      {"sis:highlight_compress", k.highlight_compressed ? "1" : "0"},
   });
-  md.insert(md.end(), extra.begin(), extra.end());
-  return stage_image(path, grid, channel_names, md);
+  for (const auto& [key, value] : extra) {
+    bool replaced = false;
+    for (auto& kv : md)
+      if (kv.first == key) kv.second = value, replaced = true;
+    if (!replaced) md.push_back({key, value});
+  }
+  return stage_image(path, grid, channel_names.empty() ? k.channel_names : channel_names, md);
 }
 
 namespace {
@@ -1496,9 +1507,18 @@ Coefficients read_coefficients(ImageReader& r) {
       if (!v.empty() && v != "0" && v != "1")
         throw std::invalid_argument(std::string(flag) + " '" + v + "': expected 0 or 1");
     }
+    k.highlight_compressed = r.attribute("sis:highlight_compress") == "1";
     const std::string input_format = r.attribute("sis:input_format");
     if (!input_format.empty() && input_format != "half" && input_format != "float")
       throw std::invalid_argument("sis:input_format '" + input_format + "': expected half or float");
+    k.input.half = input_format == "half";
+    k.input.label = r.attribute("sis:input");
+    const std::string transfer = r.attribute("sis:input_transfer");
+    try {
+      k.input.transfer = transfer.empty() ? Transfer::linear() : parse_transfer(transfer);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("sis:input_transfer ") + e.what());
+    }
     k.image_width = numbers("sis:image_width", 1)[0];
     k.image_height = numbers("sis:image_height", 1)[0];
     if (!(k.image_width >= 1 && k.image_height >= 1 && k.image_width <= kMaxFrame &&
@@ -1519,6 +1539,8 @@ Coefficients read_coefficients(ImageReader& r) {
   for (long y = 0; y < r.height(); y += r.preferred_strip())
     r.read_rows(y, std::min(r.height(), y + r.preferred_strip()), grid.row(y));
   k.c = Grid<double>(grid.width, grid.height, grid.channels);
+  k.channel_names = r.channel_names();
+  k.alpha = r.alpha_channel();
   for (std::size_t q = 0; q < grid.data.size(); ++q) k.c.data[q] = grid.data[q];
   try {
     visit_space(k, [&](auto space) { space.check_grid(k); });

@@ -289,7 +289,7 @@ double rms_of(double app_energy, double cross, double ref_energy, long count) {
 
 // What identifies a Cartesian space's samples of the reference grid.
 std::vector<double> space_key(const Coefficients& k) {
-  const Kernel& g = k.generator;
+  const Kernel& g = k.kernel();
   const auto& L = k.lattice.matrix();
   return {double(int(g.kind())), double(g.degree()), g.radius(), g.param(0), g.param(1),
           g.param(2), L[0], L[1], L[2], L[3], k.lattice.origin().x, k.lattice.origin().y,

@@ -22,7 +22,6 @@ using OIIO::TypeDesc;
 
 namespace {
 
-const auto number = metadata_number;
 std::string size_of(long w, long h) { return std::to_string(w) + "x" + std::to_string(h); }
 std::string joined(const std::vector<std::string>& v) {
   std::string s;
@@ -108,15 +107,8 @@ std::vector<std::pair<long, long>> parse_parts(const std::string& key, const std
 
 Metadata partial_request(const Partial& p) {
   Metadata md = {{"sis:lattice", space_name(p.space)}};
-  visit_space(p.space, [&](const auto& s) {
-    using S = std::decay_t<decltype(s)>;
-    if constexpr (std::is_same_v<S, CartesianSpace>) {
-      md.push_back({"sis:generator", s.generator.name()});
-    } else {
-      md.push_back({"sis:generator", BoxSpline::parse(s.order == 1 ? "hex-hat" : "hex-quartic").name()});
-      md.push_back({"sis:density", number(s.density)});
-    }
-  });
+  const Metadata own = visit_space(p.space, [](const auto& s) { return s.parameters(); });
+  md.insert(md.end(), own.begin(), own.end());
   md.insert(md.end(), {
       {"sis:input_size", size_of(p.input_width, p.input_height)},
       {"sis:size", size_of(p.width, p.height)},

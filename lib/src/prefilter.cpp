@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "fftw_planner.h"
+#include "sis/coefficients.h"
 #include "sis/space.h"
 #include "sis/weights.h"
 
@@ -180,10 +181,10 @@ void prefilter(Coefficients& coefficients, int threads, PrefilterMethod method) 
 }
 
 void CartesianSpace::prefilter(Coefficients& coefficients, int threads, PrefilterMethod method) {
-  if (!coefficients.min_error || coefficients.generator.degree() == 0) return;
+  if (!coefficients.min_error || coefficients.kernel().degree() == 0) return;
   if (!coefficients.lattice.separable())
     throw std::invalid_argument("prefilter(): only separable lattices are supported");
-  PrefilterPlan plan(coefficients.generator.degree(), coefficients.c.width, coefficients.c.height,
+  PrefilterPlan plan(coefficients.kernel().degree(), coefficients.c.width, coefficients.c.height,
                      coefficients.boundary, method);
   plan.execute(coefficients.c, threads);
 }

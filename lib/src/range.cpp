@@ -10,6 +10,7 @@
 #include <immintrin.h>
 #endif
 
+#include "sis/coefficients.h"
 #include "sis/parallel.h"
 #include "sis/prefilter.h"
 #include "sis/resample.h"
@@ -427,7 +428,7 @@ RangeReport report_range(const Image& image, const LocalRange* local, int thread
 StepResponse step_response(int degree, const Display& display) {
   const long n = 96, edge = n / 2;  // far from the border: its effect is below 1e-12
   Coefficients k;
-  k.generator = Kernel::bspline(degree);
+  k.space = CartesianSpace{Kernel::bspline(degree)};
   k.boundary = Boundary::Mirror;
   k.image_width = double(n);
   k.image_height = 1.0;

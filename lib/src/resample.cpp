@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sis/coefficients.h"
 #include "sis/space.h"
 #include "sis/weights.h"
 
@@ -78,7 +79,7 @@ AxisWeights display_axis(const Coefficients& k, int axis, long out_count,
   const double w = extent / out_count;  // final pixel size, output pixels
   const double h = k.lattice.axis_step(axis);
   const double o = k.lattice.axis_position(axis, 0);
-  const Kernel& phi = k.generator;
+  const Kernel& phi = k.kernel();
   double lo = 0, hi = 0;
   if (pixel_average) {
     lo = -0.5;
@@ -144,7 +145,7 @@ Image resample(const Coefficients& k, const Display& display, long out_width, lo
 
 double CartesianSpace::evaluate(const Coefficients& k, Vec2 x, int channel) {
   check_separable(k, "evaluate");
-  const Kernel& phi = k.generator;
+  const Kernel& phi = k.kernel();
   const double hx = k.lattice.axis_step(0), hy = k.lattice.axis_step(1);
   const Vec2 u = k.lattice.coordinates(x);
   const long x0 = static_cast<long>(std::floor(u.x - phi.radius()));

@@ -804,7 +804,7 @@ Coefficients make_coefficients(const ScatteredTarget& t, Grid<double> c) {
   Coefficients k;
   k.c = std::move(c);
   k.lattice = t.lattice;
-  k.generator = kernel_of(t);
+  k.space = t.space;
   k.boundary = t.boundary;
   k.min_error = t.method == Method::MinError;
   k.image_width = t.width;
@@ -981,7 +981,7 @@ std::vector<double> evaluate_at_samples(const Coefficients& k, const ScatteredSa
   t.height = k.image_height;
   t.boundary = k.boundary;
   t.method = k.min_error ? Method::MinError : Method::Conventional;
-  if (k.lattice.is_hexagonal()) {
+  if (std::holds_alternative<HexagonalSpace>(k.space)) {
     const HexLayout layout = hex_layout(k);
     detail::HexScatteredGrid g;
     g.layout = layout;
@@ -997,7 +997,7 @@ std::vector<double> evaluate_at_samples(const Coefficients& k, const ScatteredSa
     return out;
   }
   t.lattice = k.lattice;
-  t.space = CartesianSpace{k.generator};
+  t.space = k.space;
   const Geometry g = geometry(t);
   check(samples, t, k.c.channels, threads);
   std::vector<double> out(std::size_t(samples.count()) * k.c.channels);

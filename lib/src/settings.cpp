@@ -268,20 +268,12 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
       throw RequestError(reader.path() + " is a coefficient file: its input's transfer was decoded "
                          "before projecting; drop --input-transfer");
     f.from_coefficient_file = true;
-    f.input_half = reader.attribute("sis:input_format") == "half";
-    try {
-      const std::string recorded = reader.attribute("sis:input_transfer");
-      f.input_transfer = recorded.empty() ? Transfer::linear() : parse_transfer(recorded);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(reader.path() + ": coefficient file metadata: sis:input_transfer " + e.what());
-    }
     const auto t = Clock::now();
-    k = load_coefficients(reader.path(), r.zero_nonfinite, &f.replaced, reader.signature());
-    f.highlight_compressed = reader.attribute("sis:highlight_compress") == "1";
+    k = load_coefficients(reader.path(), r.zero_nonfinite, &f.nonfinite, reader.signature());
     f.acquire_seconds = seconds_since(t);
-    if (f.replaced.count)
-      f.warnings.push_back("replaced " + std::to_string(f.replaced.count) +
-                           " non-finite coefficients with 0; first: " + f.replaced.where);
+    if (f.nonfinite.count)
+      f.warnings.push_back("replaced " + std::to_string(f.nonfinite.count) +
+                           " non-finite coefficients with 0; first: " + f.nonfinite.where);
     // its own size is its frame's (a hexagonal grid also covers a margin)
     const auto [fw, fh] = visit_space(k, [&](auto space) { return space.frame(k); });
     std::tie(f.width, f.height) = output_size(o, r, fw, fh);
@@ -295,39 +287,26 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
                                         std::to_string(set.channels) + " output");
     f.inputs = std::move(set);
   } else {
-    Projection p;
+    Projection& p = f;
     if (set.partial_files) {
       refuse_recorded(o, r, set.label + " are partial files");
       std::vector<Partial> parts;
       for (const ProjectionInput& in : set.bands) parts.push_back(read_partial(in.path));
       p = merge(parts, threads, fr.float_coefficients);
       std::tie(f.width, f.height) = output_size(o, r, parts.front().width, parts.front().height);
-      f.input_half = p.inputs.half;
     } else {
       const ProjectionRequest rq = projection_request(o, r, set, fr, &f.width, &f.height);
-      f.input_half = set.half;
       p = project(rq, std::move(set));
     }
-    f.replaced = p.nonfinite;
     if (p.nonfinite.count)
       f.warnings.push_back("replaced " + std::to_string(p.nonfinite.count) +
                            " non-finite samples with 0; first: " + p.nonfinite.where);
-    k = std::move(p.coefficients);
-    f.local_range = std::move(p.local_range);
-    f.inputs = std::move(p.inputs);
-    f.highlight_compressed = r.highlight_compress;
-    f.input_transfer = p.transfer;
-    f.acquire_seconds = p.acquire_seconds;
-    f.prefilter_seconds = p.prefilter_seconds;
-    f.estimated_bytes = p.estimated_bytes;
   }
   f.display = r.display ? *r.display : (k.min_error ? Display::antialiased_2x2() : Display::centred());
   if (!fr.final_image) return f;
   if (fr.interrupt) fr.interrupt();
   const auto t = Clock::now();
-  f.final = final_image(k, f.display, f.width, f.height, f.highlight_compressed, r.clamp,
-                        f.local_range.get(), threads, f.inputs.label, f.inputs.channel_names,
-                        f.inputs.alpha);
+  f.final = final_image(k, f.display, f.width, f.height, r.clamp, f.local_range.get(), threads);
   f.resample_seconds = seconds_since(t);
   if (!fr.keep_coefficients) {
     Buffer<double>().swap(k.c.data);
@@ -430,10 +409,10 @@ Formed form_scattered(const Settings& o, const Resolved& r, ScatteredInput in, c
   check_memory(f.estimated_bytes, "the projection of " + std::to_string(n) + " scattered samples to " +
                                       std::to_string(f.width) + " x " + std::to_string(f.height) +
                                       " x " + std::to_string(C));
-  check_scattered(in, target.width, target.height, r.zero_nonfinite, f.replaced);
-  if (f.replaced.count)
-    f.warnings.push_back("replaced " + std::to_string(f.replaced.count) +
-                         " non-finite values with 0; first: " + f.replaced.where);
+  check_scattered(in, target.width, target.height, r.zero_nonfinite, f.nonfinite);
+  if (f.nonfinite.count)
+    f.warnings.push_back("replaced " + std::to_string(f.nonfinite.count) +
+                         " non-finite values with 0; first: " + f.nonfinite.where);
   if (r.highlight_compress) {
     for (std::size_t q = 0; q < in.samples.values.size(); ++q)
       if (int(q % C) != in.alpha) in.samples.values[q] = highlight_compress(in.samples.values[q]);
@@ -468,15 +447,15 @@ Formed form_scattered(const Settings& o, const Resolved& r, ScatteredInput in, c
   set.srgb = in.transfer.kind == Transfer::SRGB;
   set.integer_bits = in.integer_bits;
   set.label = label;
-  f.highlight_compressed = r.highlight_compress;
-  f.input_half = in.half;
-  f.input_transfer = in.transfer;
+  k.channel_names = in.channel_names;
+  k.alpha = in.alpha;
+  k.highlight_compressed = r.highlight_compress;
+  k.input = {label, in.half, in.transfer};
   f.display = r.display ? *r.display : (k.min_error ? Display::antialiased_2x2() : Display::centred());
   if (!fr.final_image) return f;
   if (fr.interrupt) fr.interrupt();
   const auto t2 = Clock::now();
-  f.final = final_image(k, f.display, f.width, f.height, f.highlight_compressed, r.clamp, nullptr,
-                        threads, label, set.channel_names, set.alpha);
+  f.final = final_image(k, f.display, f.width, f.height, r.clamp, nullptr, threads);
   f.resample_seconds = seconds_since(t2);
   if (!fr.keep_coefficients) Buffer<double>().swap(k.c.data);
   return f;

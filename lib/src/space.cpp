@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "sis/box_spline.h"
+#include "sis/coefficients.h"
 #include "sis/engine.h"
 #include "sis/hex_acquisition.h"
 #include "sis/hex_lattice.h"
@@ -18,21 +19,14 @@
 
 namespace sis {
 
-SpaceKind space_of(const Coefficients& k) {
-  if (k.box_spline) {
-    if (!k.lattice.is_hexagonal())
-      throw std::invalid_argument("space_of(): a box spline on a lattice that is not hexagonal (" +
-                                  k.lattice.description() + ")");
-    return SpaceKind::Hexagonal;
-  }
-  if (k.lattice.is_hexagonal())
-    throw std::invalid_argument("space_of(): a hexagonal lattice without its box spline");
-  return SpaceKind::Cartesian;
+const Kernel& Coefficients::kernel() const {
+  const auto* cartesian = std::get_if<CartesianSpace>(&space);
+  if (!cartesian)
+    throw std::invalid_argument("Coefficients::kernel(): coefficients of the " + space_name(space) +
+                                " space have a box spline, not a Kernel");
+  return cartesian->generator;
 }
 
-std::string space_name(SpaceKind kind) {
-  return kind == SpaceKind::Hexagonal ? HexagonalSpace::lattice_name : CartesianSpace::lattice_name;
-}
 std::string space_name(const Space& space) {
   return visit_space(space, [](const auto& s) { return std::string(s.lattice_name); });
 }
@@ -74,14 +68,15 @@ std::unique_ptr<CartesianSink> CartesianSpace::sink(const SpaceRequest& rq) cons
   return std::make_unique<CartesianSink>(rq.input_width, rq.input_height, rq.channels, rq.width,
                                          rq.height, generator, rq.boundary, rq.method, rq.threads);
 }
+Metadata CartesianSpace::parameters() const { return {{"sis:generator", generator.name()}}; }
 void CartesianSpace::read_metadata(const Attributes& attribute, Coefficients& k) {
   const auto& L = k.lattice.matrix();
   if (!k.lattice.separable() || !(L[0] > 0) || !(L[3] > 0) || attribute("sis:storage") != "rows")
     throw std::invalid_argument("sis:lattice cartesian needs a diagonal sis:lattice_matrix of "
                                 "positive steps and sis:storage rows");
-  k.generator = Kernel::parse(attribute("sis:generator"));
+  k.space = CartesianSpace{Kernel::parse(attribute("sis:generator"))};
   const std::string degree = attribute("sis:degree");
-  if (degree != std::to_string(k.generator.degree()))
+  if (degree != std::to_string(k.kernel().degree()))
     throw std::invalid_argument("sis:degree '" + degree + "' is not the degree of generator " +
                                 attribute("sis:generator"));
 }
@@ -97,13 +92,13 @@ void CartesianSpace::check_grid(const Coefficients& k) {
 }
 std::string CartesianSpace::describe(const Coefficients&) { return ""; }
 
-std::string CartesianSpace::generator_name(const Coefficients& k) { return k.generator.name(); }
-double CartesianSpace::radius(const Coefficients& k) { return k.generator.radius(); }
+std::string CartesianSpace::generator_name(const Coefficients& k) { return k.kernel().name(); }
+double CartesianSpace::radius(const Coefficients& k) { return k.kernel().radius(); }
 std::pair<long, long> CartesianSpace::frame(const Coefficients& k) { return {k.c.width, k.c.height}; }
 Metadata CartesianSpace::metadata(const Coefficients& k) {
   Metadata md = lattice_metadata(k, k.lattice.separable() ? "cartesian" : "general", "rows");
-  md.push_back({"sis:generator", k.generator.name()});
-  md.push_back({"sis:degree", std::to_string(k.generator.degree())});
+  md.push_back({"sis:generator", k.kernel().name()});
+  md.push_back({"sis:degree", std::to_string(k.kernel().degree())});
   return md;
 }
 
@@ -168,13 +163,17 @@ std::unique_ptr<HexagonalSink> HexagonalSpace::sink(const SpaceRequest& rq) cons
   return std::make_unique<HexagonalSink>(rq.input_width, rq.input_height, rq.channels, rq.width,
                                          rq.height, layout, order, rq.boundary, rq.threads);
 }
+Metadata HexagonalSpace::parameters() const {
+  return {{"sis:generator", BoxSpline::hexagonal(order).name()}, {"sis:density", number(density)}};
+}
 void HexagonalSpace::read_metadata(const Attributes& attribute, Coefficients& k) {
   if (!k.lattice.is_hexagonal() || attribute("sis:storage") != "offset-rows")
     throw std::invalid_argument("sis:lattice hexagonal needs a hexagonal sis:lattice_matrix "
                                 "and sis:storage offset-rows");
-  k.box_spline = &BoxSpline::hexagonal(BoxSpline::parse(attribute("sis:generator")).order());
+  const int order = BoxSpline::parse(attribute("sis:generator")).order();
+  k.space = HexagonalSpace{order, 1.0 / std::abs(k.lattice.determinant())};
   const std::string degree = attribute("sis:degree");
-  if (degree != std::to_string(3 * k.box_spline->order() - 2))
+  if (degree != std::to_string(3 * order - 2))
     throw std::invalid_argument("sis:degree '" + degree + "' is not the degree of generator " +
                                 attribute("sis:generator"));
 }

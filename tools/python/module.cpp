@@ -149,12 +149,7 @@ py::array_t<float> to_array(Image&& image) {
 
 // Coefficients with what a final image or a coefficient file needs of them.
 struct PyCoefficients {
-  Coefficients k;
-  std::vector<std::string> channel_names;
-  int alpha = -1;
-  std::string label;
-  bool highlight_compressed = false;
-  bool input_half = false;
+  Coefficients k;  // describe themselves: channels, alpha, remedies, input
   int threads = 1;
   std::optional<ScatteredReport> report;  // of scattered samples
   ScatteredRule rule = ScatteredRule::LeastSquares;
@@ -257,11 +252,6 @@ py::tuple run_form(py::object input, const Settings& s, bool coefficients_only,
       return py::make_tuple(to_array(std::move(f.final.image)), py::none(), warnings);
     auto k = std::make_unique<PyCoefficients>();
     k->k = std::move(f.coefficients);
-    k->channel_names = f.inputs.channel_names;
-    k->alpha = f.inputs.alpha;
-    k->label = f.inputs.label;
-    k->highlight_compressed = f.highlight_compressed;
-    k->input_half = f.input_half;
     k->threads = r.threads;
     k->report = f.scattered;
     k->rule = r.scattered.rule;
@@ -497,11 +487,6 @@ py::tuple merge_from(const std::vector<std::string>& paths, int threads) {
     for (const std::string& w : f.warnings) warnings.append(w);
     auto k = std::make_unique<PyCoefficients>();
     k->k = std::move(f.coefficients);
-    k->channel_names = f.inputs.channel_names;
-    k->alpha = f.inputs.alpha;
-    k->label = f.inputs.label;
-    k->highlight_compressed = f.highlight_compressed;
-    k->input_half = f.input_half;
     k->threads = r.threads;
     return py::make_tuple(py::cast(std::move(k)), warnings);
   });
@@ -514,11 +499,6 @@ PyCoefficients load_file(const std::string& path, bool zero_nonfinite, int threa
     if (!is_coefficient_file(reader))
       throw InputError(path + ": not a coefficient file (write one with coefficients(...).save() "
                               "or siproject --coeffs)");
-    out.channel_names = reader.channel_names();
-    out.alpha = reader.alpha_channel();
-    out.label = reader.attribute("sis:input");
-    out.highlight_compressed = reader.attribute("sis:highlight_compress") == "1";
-    out.input_half = reader.attribute("sis:input_format") == "half";
     reader.release();
     out.threads = resolved_threads(threads);
     py::gil_scoped_release free;
@@ -551,8 +531,7 @@ py::array_t<float> resample_to(const PyCoefficients& c, const std::string& size,
     FinalImage f;
     {
       py::gil_scoped_release free;
-      f = final_image(c.k, shown, W, H, c.highlight_compressed, cl, nullptr, c.threads, c.label,
-                      c.channel_names, c.alpha);
+      f = final_image(c.k, shown, W, H, cl, nullptr, c.threads);
     }
     return to_array(std::move(f.image));
   });
@@ -597,10 +576,7 @@ void save_to(const PyCoefficients& c, const std::string& path) {
     if (!holds_coefficients(path))
       throw RequestError("--coeffs " + path + ": coefficient files are OpenEXR (.exr); this format "
                          "cannot hold their metadata and signed float coefficients");
-    stage_coefficients(path, c.k, c.channel_names,
-                       {{"sis:input", c.label},
-                        {"sis:input_format", c.input_half ? "half" : "float"},
-                        {"sis:highlight_compress", c.highlight_compressed ? "1" : "0"}})
+    stage_coefficients(path, c.k)
         .commit();
     return 0;
   });
@@ -647,7 +623,7 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "The engine of siproject (see the siproject package for the documented API).";
   m.attr("__version__") = SIS_PYTHON_VERSION;  // the project's (CMakeLists.txt)
   py::class_<PyCoefficients>(m, "Coefficients")
-      .def_property_readonly("lattice", [](const PyCoefficients& c) { return space_name(space_of(c.k)); })
+      .def_property_readonly("lattice", [](const PyCoefficients& c) { return space_name(c.k.space); })
       .def_property_readonly("generator", [](const PyCoefficients& c) { return generator_name(c.k); })
       .def_property_readonly("method", [](const PyCoefficients& c) {
         return std::string(c.k.min_error ? "min-error" : "conventional");
@@ -656,8 +632,8 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("frame", [](const PyCoefficients& c) {
         return visit_space(c.k, [&](auto space) { return space.frame(c.k); });
       })
-      .def_property_readonly("channel_names", [](const PyCoefficients& c) { return c.channel_names; })
-      .def_property_readonly("highlight_compressed", [](const PyCoefficients& c) { return c.highlight_compressed; })
+      .def_property_readonly("channel_names", [](const PyCoefficients& c) { return c.k.channel_names; })
+      .def_property_readonly("highlight_compressed", [](const PyCoefficients& c) { return c.k.highlight_compressed; })
       .def_property_readonly("report", [](const PyCoefficients& c) -> py::object {
         if (!c.report) return py::none();
         py::dict d;

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "sis/coefficients.h"
 #include "sis/acquisition.h"
 #include "sis/hex_acquisition.h"
 #include "sis/imageio.h"
@@ -128,8 +129,6 @@ struct Projection {
   InputSet inputs;
   std::unique_ptr<LocalRange> local_range;  // of the samples under each output pixel
   NonFiniteReport nonfinite;                // those replaced by 0
-  bool highlight_compressed = false;
-  Transfer transfer;  // the samples' transfer, decoded before projecting
   double acquire_seconds = 0, prefilter_seconds = 0;
   std::uint64_t estimated_bytes = 0;
 };
@@ -150,7 +149,8 @@ Projection project(const ProjectionRequest& request, InputSet inspected);
 // memory check is of all the targets together.
 std::vector<Projection> project(const std::vector<ProjectionRequest>& requests);
 
-// A coefficient file, read and checked: non-finite coefficients are an
+// A coefficient file, read and checked (its input's label: `path`, which
+// messages name): non-finite coefficients are an
 // InputError, or replaced by 0 (counted in `replaced`). With `expected`
 // (the signature of a reader that read its header first), a file that is
 // no longer that file is an InputError.
@@ -166,13 +166,12 @@ struct FinalImage {
 
 // The final image of W x H pixels: f_app sampled by the display (the
 // conventional methods' own pixels where centred at the lattice's size),
-// highlights expanded (every channel but `alpha`), ranges reported,
-// clamped. A value that passes float's range is an InputError naming
-// `label` and the channel of `names`. `local` may be null.
-FinalImage final_image(const Coefficients& k, const Display& display, long W, long H,
-                       bool highlight_expand, Clamp clamp, const LocalRange* local, int threads,
-                       const std::string& label, const std::vector<std::string>& names,
-                       int alpha = -1);
+// highlights expanded where the coefficients hold compressed values (every
+// channel but their alpha), ranges reported, clamped. A value that passes
+// float's range is an InputError naming the coefficients' input and
+// channel. `local` may be null.
+FinalImage final_image(const Coefficients& k, const Display& display, long W, long H, Clamp clamp,
+                       const LocalRange* local, int threads);
 
 // The peak bytes a projection to W x H x C needs (coefficients, local range,
 // image, write copies, weight tables, per-thread buffers), and the refusal

@@ -35,6 +35,7 @@
 // 4: hex-quartic); boundary = the input's extension rule.
 #include <string>
 
+#include "sis/coefficients.h"
 #include "sis/box_spline.h"
 #include "sis/image.h"
 

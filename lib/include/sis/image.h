@@ -110,23 +110,7 @@ struct SampleView {
   }
 };
 
-// Coefficients of an approximation f_app(x) = sum_n c[n] phi((x - x_n)/h)
-// on a lattice covering an image of image_width x image_height output pixels.
-// For the conventional methods c[n] are the filtered pixel values p[n] and
-// phi is the filter.
-class BoxSpline;
-
-struct Coefficients {
-  Grid<double> c;
-  Lattice lattice = Lattice::cartesian();
-  // The generator: a Kernel in the Cartesian space; in the hexagonal space
-  // the box spline (box_spline, non-null; then `generator` is unused).
-  // sis/space.h dispatches on which.
-  Kernel generator = Kernel::bspline(3);
-  const BoxSpline* box_spline = nullptr;
-  Boundary boundary = Boundary::Mirror;
-  bool min_error = true;  // false: conventional normalised weighted average
-  double image_width = 0, image_height = 0;
-};
+// Coefficients of an approximation live in sis/coefficients.h.
+struct Coefficients;
 
 }  // namespace sis

@@ -346,7 +346,10 @@ float srgb_to_linear(float v);
 float linear_to_srgb(float v);
 
 // Coefficient files: a float EXR of the coefficient grid whose metadata
-// records lattice, generator, degree, boundary, method and frame size.
+// records everything Coefficients holds: lattice, generator, degree,
+// boundary, method, frame size, the input's label, format and transfer and
+// the highlight compression; its channels are k.channel_names (unless
+// `channel_names` is given). `extra` adds keys or replaces these.
 void write_coefficients(const std::string& path, const Coefficients& k,
                         const std::vector<std::string>& channel_names = {},
                         const Metadata& extra = {});

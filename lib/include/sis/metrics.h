@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "sis/coefficients.h"
 #include "sis/image.h"
 
 namespace sis {

@@ -2,6 +2,7 @@
 // The whole method on an in-memory image: acquisition on the Cartesian
 // output lattice, then (min-error) the digital prefilter. Streaming callers
 // (siproject) use AcquisitionPlan / Acquisition / prefilter() directly.
+#include "sis/coefficients.h"
 #include "sis/acquisition.h"
 #include "sis/prefilter.h"
 #include "sis/resample.h"

@@ -28,6 +28,7 @@
 #include <utility>
 #include <vector>
 
+#include "sis/coefficients.h"
 #include "sis/acquisition.h"
 #include "sis/space.h"
 #include "sis/image.h"

@@ -92,21 +92,16 @@ struct FormRequest {
   std::function<void()> interrupt;  // ProjectionRequest::interrupt; also called before resampling
 };
 
-struct Formed {
-  InputSet inputs;
-  Coefficients coefficients;
-  std::unique_ptr<LocalRange> local_range;  // of the samples under each pixel (none from a coefficient file)
+// A projection (engine.h: the coefficients, which describe themselves, the
+// inputs, the local range, the non-finite samples or coefficients replaced
+// by 0, the times) and its final image.
+struct Formed : Projection {
   FinalImage final;
   Display display;           // the one used (or that would be: the method's default)
   long width = 0, height = 0;
   bool from_coefficient_file = false;
-  bool highlight_compressed = false;  // the coefficients hold compressed values
-  bool input_half = false;            // every input stores half (a coefficient file: its input did)
-  Transfer input_transfer;            // the inputs' transfer, decoded (a coefficient file: its input's)
-  NonFiniteReport replaced;           // non-finite samples (or coefficients) replaced by 0
   std::vector<std::string> warnings;  // for the user, without the tool's name
-  double acquire_seconds = 0, prefilter_seconds = 0, resample_seconds = 0;
-  std::uint64_t estimated_bytes = 0;
+  double resample_seconds = 0;
   std::optional<ScatteredReport> scattered;  // scattered samples: what the rule did
 };
 

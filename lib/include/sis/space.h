@@ -28,10 +28,7 @@
 
 namespace sis {
 
-enum class SpaceKind { Cartesian, Hexagonal };
-
-SpaceKind space_of(const Coefficients& k);
-std::string space_name(SpaceKind kind);  // "cartesian" | "hexagonal"
+struct Coefficients;  // sis/coefficients.h: they hold their space
 
 // What a projection into a space costs before it runs: its coefficients
 // (values per channel) and the bytes of its acquisition's tables.
@@ -56,7 +53,6 @@ class CartesianSink;  // the acquisition sinks (lib/src/space_sinks.h)
 class HexagonalSink;
 
 struct CartesianSpace {
-  static constexpr SpaceKind kind = SpaceKind::Cartesian;
   static constexpr const char* lattice_name = "cartesian";  // sis:lattice
   Kernel generator = Kernel::bspline(3);
 
@@ -72,6 +68,9 @@ struct CartesianSpace {
   SpaceBudget budget(const SpaceRequest& rq) const;
   using Sink = CartesianSink;
   std::unique_ptr<CartesianSink> sink(const SpaceRequest& rq) const;
+  // Its parameters as metadata (sis:generator; a partial's request), as
+  // parse_space reads them back.
+  Metadata parameters() const;
 
   // c = r * a^{-1} (min-error; nothing for the conventional methods and degree 0)
   static void prefilter(Coefficients& k, int threads, PrefilterMethod method);
@@ -100,7 +99,6 @@ struct CartesianSpace {
 };
 
 struct HexagonalSpace {
-  static constexpr SpaceKind kind = SpaceKind::Hexagonal;
   static constexpr const char* lattice_name = "hexagonal";
   int order = 2;         // of the box spline: 1 hex-hat, 2 hex-quartic
   double density = 1.0;  // lattice points per output pixel
@@ -111,6 +109,7 @@ struct HexagonalSpace {
   SpaceBudget budget(const SpaceRequest& rq) const;
   using Sink = HexagonalSink;
   std::unique_ptr<HexagonalSink> sink(const SpaceRequest& rq) const;
+  Metadata parameters() const;  // sis:generator, sis:density
 
   static void prefilter(Coefficients& k, int threads, PrefilterMethod method);  // FFT only
   static Image resample(const Coefficients& k, const Display& display, long W, long H, int threads);
@@ -132,11 +131,7 @@ using Space = std::variant<CartesianSpace, HexagonalSpace>;
 // the Cartesian one.
 std::string generator_name(const Coefficients& k);
 
-template <typename F>
-decltype(auto) visit_space(const Coefficients& k, F&& f) {
-  if (space_of(k) == SpaceKind::Hexagonal) return f(HexagonalSpace{});
-  return f(CartesianSpace{});
-}
+// visit_space(coefficients, f): sis/coefficients.h.
 template <typename F>
 decltype(auto) visit_space(const Space& space, F&& f) {
   return std::visit(std::forward<F>(f), space);
