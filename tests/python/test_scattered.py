@@ -384,8 +384,9 @@ def test_an_oiiotool_file_of_a_flat_image_stays_flat_on_the_hexagonal_lattice(tm
          "-o", str(samples)], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     out = tmp_path / "out.exr"
+    coeffs = tmp_path / "coeffs.exr"
     r = siproject_run(samples, "-o", out, "--size", "20x14", "--lattice", "hex", "--generator",
-                      generator, "--rule", rule, "-d", "float")
+                      generator, "--rule", rule, "-d", "float", "--coeffs", coeffs)
     assert r.returncode == 0, r.stderr
     image = siproject.read_image(out)
     assert image.shape == (14, 20, 3)
@@ -395,6 +396,15 @@ def test_an_oiiotool_file_of_a_flat_image_stays_flat_on_the_hexagonal_lattice(tm
     # kept in float; the 2x2 display sums the box spline's weights (1 to
     # rounding) in double and rounds to float: within one ulp of float.
     assert np.abs(image - want).max() <= np.spacing(want).max()
+    # the coefficient file is a hexagonal grid's, flat, and evaluates to the
+    # same image without the samples
+    k = siproject.load(coeffs)
+    assert (k.lattice, k.generator) == ("hexagonal", generator)
+    assert np.abs(k.array - want).max() <= np.spacing(want).max()
+    again = tmp_path / "again.exr"
+    r = siproject_run(coeffs, "-o", again, "-d", "float")
+    assert r.returncode == 0, r.stderr
+    assert np.array_equal(siproject.read_image(again), image)
     # the module, on the same samples as arrays, gives the tool's image
     pix = siproject.read_image(samples)
     values, positions = pix[..., :3].reshape(-1, 3), pix[..., 3:].reshape(-1, 2).astype(np.float64)
