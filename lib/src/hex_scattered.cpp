@@ -140,8 +140,9 @@ void axis_images(double x, double E, Boundary b, double lo, double hi, std::vect
   }
 }
 
-// Calls f(x', y') for the images of sample (x, y) the rule counts, y outer,
-// each axis's images in axis_images' order.
+// The images of one sample the rule counts: every (xs[a], ys[b]), taken
+// y outer, each axis's in axis_images' order (the order the passes and the
+// per-image values share).
 struct Imager {
   const HexScatteredGrid& g;
   HexImages images;
@@ -159,7 +160,6 @@ struct Imager {
   }
   long count() const { return long(xs.size() * ys.size()); }
 };
-
 
 }  // namespace
 
