@@ -4,7 +4,9 @@
 // time per sample of the normalised pass (its checks included) against the
 // grid acquisition of the same rays on a regular grid, on one thread and on
 // all of them, medians of `runs` in this process; the fit's passes, time and
-// memory. Usage: scattered_study [runs (default 7)]
+// memory. The same on the hexagonal lattice (hex-hat and hex-quartic at
+// density 1, against the hexagonal grid acquisition of the regular grid).
+// Usage: scattered_study [runs (default 7)] [cartesian|hex (default both)]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -16,6 +18,9 @@
 #include <thread>
 #include <vector>
 
+#include <string>
+
+#include "sis/hex_projection.h"
 #include "sis/metrics.h"
 #include "sis/projection.h"
 #include "sis/scattered.h"
@@ -37,6 +42,7 @@ static double seconds(const std::function<void()>& f) {
 
 int main(int argc, char** argv) {
   if (argc > 1) runs = std::max(1, std::atoi(argv[1]));
+  const std::string which = argc > 2 ? argv[2] : "both";
   const int all = std::max(1, int(std::thread::hardware_concurrency()));
   const long W = 256, H = 256;
   const double K = 0.7 * M_PI * 256;
@@ -44,6 +50,7 @@ int main(int argc, char** argv) {
   target.width = W;
   target.height = H;
   for (int s : {2, 4}) {
+    if (which == "hex") break;
     std::mt19937_64 g(1);
     ScatteredSamples smp;
     Image grid(W * s, H * s, 1);
@@ -97,4 +104,62 @@ int main(int argc, char** argv) {
       if (all == 1) break;
     }
   }
+  if (which == "cartesian") return 0;
+  for (int order : {1, 2})
+    for (int s : {2, 4}) {
+      std::mt19937_64 g(1);
+      ScatteredSamples smp;
+      Image grid(W * s, H * s, 1);
+      for (long j = 0; j < H * s; ++j)
+        for (long i = 0; i < W * s; ++i) {
+          grid.at(i, j, 0) = float(zoneplate(K, W, H, (i + 0.5) / s, (j + 0.5) / s));
+          const double x = (i + double(g() >> 11) * 0x1p-53) / s;
+          const double y = (j + double(g() >> 11) * 0x1p-53) / s;
+          smp.positions.push_back(x);
+          smp.positions.push_back(y);
+          smp.values.push_back(float(zoneplate(K, W, H, x, y)));
+          smp.weights.push_back(1.0 / (s * s));
+        }
+      const char* name = order == 1 ? "hex-hat" : "hex-quartic";
+      ScatteredTarget ht = target;
+      ht.space = HexagonalSpace{order, 1.0};
+      HexProjectionOptions po;
+      po.order = order;
+      const Coefficients kg = project_hexagonal(grid, W, H, po);
+      std::printf("%s %d rays/px  regular grid           L2 %.5f\n", name, s * s,
+                  zoneplate_l2_error(kg, K, 8));
+      for (ScatteredRule rule : {ScatteredRule::PlainSum, ScatteredRule::NormalisedSum}) {
+        ScatteredOptions o;
+        o.rule = rule;
+        std::printf("%s %d rays/px  jittered %-12s  L2 %.5f\n", name, s * s,
+                    scattered_rule_name(rule), zoneplate_l2_error(project_scattered(smp, ht, o), K, 8));
+      }
+      for (int it : {1, 2, 5, 20}) {
+        ScatteredOptions o;
+        o.rule = ScatteredRule::LeastSquares;
+        o.iterations = it;
+        ScatteredReport rep;
+        Coefficients k;
+        const double t = seconds([&] { k = project_scattered(smp, ht, o, &rep); });
+        std::printf("%s %d rays/px  jittered fit %2d it     L2 %.5f  passes %ld  %.3f s  %.1f MB  (1 thread)\n",
+                    name, s * s, rep.iterations, zoneplate_l2_error(k, K, 8), rep.passes, t,
+                    rep.bytes / 1e6);
+      }
+      const double n = double(W * s) * H * s;
+      const int margin = hex_default_margin(order);
+      const HexAcquisitionPlan plan(W * s, H * s, 1, W, H, hex_layout(1.0, W, H, margin), order,
+                                    Boundary::Mirror);
+      for (int threads : {1, all}) {
+        const double t_scat = seconds([&] {
+          ScatteredAcquisition a(ht, 1, threads);
+          a.add(smp);
+        });
+        const double t_grid = seconds([&] { acquire(grid, plan, threads); });
+        std::printf("%s %d rays/px  %d thread%s  time per sample: normalised pass %.2f ns (checks "
+                    "included), grid acquisition %.2f ns, ratio %.2f\n",
+                    name, s * s, threads, threads > 1 ? "s" : "", 1e9 * t_scat / n, 1e9 * t_grid / n,
+                    t_scat / t_grid);
+        if (all == 1) break;
+      }
+    }
 }

@@ -21,6 +21,10 @@
 namespace sis {
 namespace {
 
+const Kernel& generator_of(const ScatteredTarget& t) {
+  return std::get<CartesianSpace>(t.space).generator;
+}
+
 double uniform(std::mt19937_64& g) { return double(g() >> 11) * 0x1p-53; }
 
 ScatteredSamples random_samples(long n, int channels, double W, double H, std::uint64_t seed,
@@ -41,7 +45,7 @@ ScatteredTarget target(double W, double H, int degree, Boundary b) {
   ScatteredTarget t;
   t.width = W;
   t.height = H;
-  t.generator = Kernel::bspline(degree);
+  t.space = CartesianSpace{Kernel::bspline(degree)};
   t.boundary = b;
   return t;
 }
@@ -70,8 +74,8 @@ std::vector<std::vector<double>> design(const ScatteredSamples& s, const Scatter
     for (long y = 0; y < H; ++y)
       for (long x = 0; x < W; ++x)
         Phi[i][y * W + x] =
-            axis_reference(t.generator, s.positions[2 * i], x, t.width, t.boundary) *
-            axis_reference(t.generator, s.positions[2 * i + 1], y, t.height, t.boundary);
+            axis_reference(generator_of(t), s.positions[2 * i], x, t.width, t.boundary) *
+            axis_reference(generator_of(t), s.positions[2 * i + 1], y, t.height, t.boundary);
   return Phi;
 }
 
@@ -85,7 +89,7 @@ Coefficients normalised_reference(const ScatteredSamples& s, const ScatteredTarg
   const long W = long(t.width), H = long(t.height);
   Coefficients k;
   k.c = Grid<double>(W, H, s.channels);
-  k.space = CartesianSpace{t.generator};
+  k.space = t.space;
   k.boundary = t.boundary;
   k.image_width = t.width;
   k.image_height = t.height;
@@ -185,7 +189,7 @@ TEST(Scattered, OtherTapRulesAndWidthsEqualDirectDoubleSums) {
     }
     for (const Kernel& k : {Kernel::gaussian(), Kernel::lanczos(3)}) {
       ScatteredTarget t = target(6, 4, 3, b);
-      t.generator = k;
+      t.space = CartesianSpace{k};
       t.method = Method::Conventional;
       const ScatteredSamples s = random_samples(400, 2, 6, 4, 13);
       const auto Phi = design(s, t);
@@ -210,7 +214,7 @@ TEST(Scattered, PlainSumAndConventionalEqualDirectDoubleSums) {
     const auto Phi = design(s, t);
     Coefficients want;
     want.c = Grid<double>(6, 4, 1);
-    want.space = CartesianSpace{t.generator};
+    want.space = t.space;
     want.boundary = t.boundary;
     for (long n = 0; n < 24; ++n) {
       double num = 0;
@@ -225,7 +229,7 @@ TEST(Scattered, PlainSumAndConventionalEqualDirectDoubleSums) {
   // Conventional Mitchell: the normalised weighted average itself.
   for (Boundary b : {Boundary::Mirror, Boundary::Periodic}) {
     ScatteredTarget t = target(6, 4, 3, b);
-    t.generator = Kernel::mitchell();
+    t.space = CartesianSpace{Kernel::mitchell()};
     t.method = Method::Conventional;
     const ScatteredSamples s = random_samples(300, 1, 6, 4, 9);
     const auto Phi = design(s, t);
@@ -476,12 +480,12 @@ TEST(Scattered, BadInputIsRefusedWithAClearMessage) {
                "no sample in its generator's support");
   ScatteredTarget conv = t;
   conv.method = Method::Conventional;
-  conv.generator = Kernel::mitchell();
+  conv.space = CartesianSpace{Kernel::mitchell()};
   ScatteredOptions fit;
   fit.rule = ScatteredRule::LeastSquares;
   expect_error([&] { project_scattered(good, conv, fit); }, "conventional method takes the normalised");
   ScatteredTarget mitchell = t;
-  mitchell.generator = Kernel::mitchell();
+  mitchell.space = CartesianSpace{Kernel::mitchell()};
   expect_error([&] { project_scattered(good, mitchell); }, "min-error needs a B-spline");
   expect_error([] { parse_scattered_rule("exact"); }, "unknown scattered rule 'exact'");
   // A bad sample past the first blocks: named as in one pass; the

@@ -11,7 +11,10 @@
 #include <string>
 #include <type_traits>
 #include <utility>
+#include <variant>
 
+#include "hex_scattered.h"
+#include "sis/hex_prefilter.h"
 #include "sis/parallel.h"
 
 namespace sis {
@@ -156,6 +159,17 @@ void with_taps(const Kernel& k, F&& f) {
   return f(KernelTaps(k));
 }
 
+// The Cartesian target's generator.
+const Kernel& kernel_of(const ScatteredTarget& t) {
+  const auto* c = std::get_if<CartesianSpace>(&t.space);
+  if (!c) throw std::logic_error("scattered projection: not a Cartesian target");
+  return c->generator;
+}
+
+bool is_hexagonal(const ScatteredTarget& t) {
+  return std::holds_alternative<HexagonalSpace>(t.space);
+}
+
 struct Geometry {
   long nx, ny;
   double ox, oy, hx, hy;
@@ -173,12 +187,12 @@ Geometry geometry(const ScatteredTarget& t) {
     throw std::invalid_argument(
         "scattered projection: the lattice's origin must be half a step in (coefficients centred in "
         "their cells), as the boundary rule folds about the frame's edges");
-  if (t.generator.radius() * 2 + 1 > kMaxTaps)
-    throw std::invalid_argument("scattered projection: generator " + t.generator.name() +
-                                " is too wide");
-  if (t.method == Method::MinError && !t.generator.is_bspline())
+  const Kernel& phi = kernel_of(t);
+  if (phi.radius() * 2 + 1 > kMaxTaps)
+    throw std::invalid_argument("scattered projection: generator " + phi.name() + " is too wide");
+  if (t.method == Method::MinError && !phi.is_bspline())
     throw std::invalid_argument("scattered projection: min-error needs a B-spline generator, not " +
-                                t.generator.name());
+                                phi.name());
   return g;
 }
 
@@ -723,7 +737,7 @@ bool splat(const ScatteredSamples& s, const ScatteredTarget& t, const Geometry& 
   const Axes ax = axes(g, t.boundary);
   const int A = acc.channels;
   const long n = s.count();
-  with_taps(t.generator, [&](const auto& taps) {
+  with_taps(kernel_of(t), [&](const auto& taps) {
     const int K = taps.count();
     with_width(A, [&](auto a) {
       constexpr int AA = decltype(a)::value;
@@ -769,7 +783,7 @@ void evaluate(const ScatteredSamples& s, const ScatteredTarget& t, const Geometr
   const Axes ax = axes(g, t.boundary);
   const int C = c.channels;
   const long n = s.count(), blocks = (n + kBlock - 1) / kBlock;
-  with_taps(t.generator, [&](const auto& taps) {
+  with_taps(kernel_of(t), [&](const auto& taps) {
     const int K = taps.count();
     with_width(C, [&](auto cc) {
       constexpr int CC = decltype(cc)::value;
@@ -790,7 +804,7 @@ Coefficients make_coefficients(const ScatteredTarget& t, Grid<double> c) {
   Coefficients k;
   k.c = std::move(c);
   k.lattice = t.lattice;
-  k.space = CartesianSpace{t.generator};
+  k.space = t.space;
   k.boundary = t.boundary;
   k.min_error = t.method == Method::MinError;
   k.image_width = t.width;
@@ -829,8 +843,8 @@ ScatteredAcquisition::ScatteredAcquisition(const ScatteredTarget& target, int ch
                                            int threads)
     : target_(target), channels_(channels), threads_(threads < 1 ? 1 : threads) {
   if (channels < 1) throw std::invalid_argument("scattered acquisition: channels must be >= 1");
-  const Geometry g = geometry(target_);
-  sums_ = Grid<double>(g.nx, g.ny, channels + 1);
+  const auto [nx, ny] = scattered_grid(target_);
+  sums_ = Grid<double>(nx, ny, channels + 1);
 }
 
 std::size_t ScatteredAcquisition::bytes() const { return sums_.data.size() * sizeof(double); }
@@ -856,13 +870,22 @@ void ScatteredAcquisition::add(const ScatteredSamples& s) {
     throw std::logic_error(
         "scattered acquisition: an earlier add() met a bad sample; its sums hold part of that call");
   check_counts(s, channels_);
-  const Geometry g = geometry(target_);
-  // Several threads: the plan of their rows checks every sample first. One:
-  // each block is checked as it is added, while it is in the cache.
   // A bad sample leaves the acquisition refusing more, however many
   // threads (and so whether part of the call was added).
   failed_ = true;
-  const RowPlan plan = plan_rows(s, g, reach(target_.generator), threads_, &target_);
+  if (is_hexagonal(target_)) {
+    // Every sample is checked before any is added.
+    check(s, target_, channels_, threads_);
+    const detail::HexScatteredGrid g = detail::hex_scattered_grid(target_);
+    detail::hex_splat(g, s, s.values.data(), channels_, false, detail::HexImages::Grid, sums_,
+                      threads_);
+    failed_ = false;
+    return;
+  }
+  const Geometry g = geometry(target_);
+  // Several threads: the plan of their rows checks every sample first. One:
+  // each block is checked as it is added, while it is in the cache.
+  const RowPlan plan = plan_rows(s, g, reach(kernel_of(target_)), threads_, &target_);
   if (!splat(s, target_, g, plan, s.values.data(), channels_, sums_, threads_, plan.parts() == 1))
     name_bad_sample(s, target_);
   failed_ = false;
@@ -881,16 +904,26 @@ Coefficients ScatteredAcquisition::finish(ScatteredRule rule) const {
     throw std::invalid_argument(
         std::string("scattered projection: the conventional method takes the normalised weighted "
                     "average, not the ") + scattered_rule_name(rule) + " rule");
-  const Geometry g = geometry(target_);
-  Grid<double> r(g.nx, g.ny, channels_, kUnset);
+  const bool hex = is_hexagonal(target_);
+  const long nx = sums_.width, ny = sums_.height;
+  Grid<double> r(nx, ny, channels_, kUnset);
   // In lattice units the inner product of a flat 1 with phi is int phi
-  // (1 for the B-splines); the plain sum's lattice-unit scale is 1 / (hx hy).
-  const double integral = target_.generator.integral() * target_.generator.integral();
-  const double plain = 1.0 / (g.hx * g.hy);
+  // (1 for the B-splines and the box splines); the plain sum's lattice-unit
+  // scale is 1 / (hx hy), on the hexagonal lattice 1 / |det L|.
+  double integral = 1, plain = 1;
+  std::unique_ptr<detail::HexScatteredGrid> hg;
+  if (hex) {
+    hg = std::make_unique<detail::HexScatteredGrid>(detail::hex_scattered_grid(target_));
+    plain = 1.0 / std::abs(hg->layout.lattice.determinant());
+  } else {
+    const Geometry g = geometry(target_);
+    integral = kernel_of(target_).integral() * kernel_of(target_).integral();
+    plain = 1.0 / (g.hx * g.hy);
+  }
   const int A = channels_ + 1;
-  for (long y = 0; y < g.ny; ++y)
-    for (long x = 0; x < g.nx; ++x) {
-      const double* sum = sums_.data.data() + (std::size_t(y) * g.nx + x) * A;
+  for (long y = 0; y < ny; ++y)
+    for (long x = 0; x < nx; ++x) {
+      const double* sum = sums_.data.data() + (std::size_t(y) * nx + x) * A;
       double* out = &r.at(x, y, 0);
       const double d = sum[channels_];
       if (rule == ScatteredRule::PlainSum) {
@@ -907,9 +940,38 @@ Coefficients ScatteredAcquisition::finish(ScatteredRule rule) const {
       const double scale = min_error ? integral / d : 1.0 / d;
       for (int c = 0; c < channels_; ++c) out[c] = sum[c] * scale;
     }
+  if (hex) {
+    Coefficients k = detail::hex_scattered_coefficients(*hg, std::move(r));
+    HexPrefilterPlan(hg->spline->order(), nx, ny).execute(k.c, threads_);
+    return k;
+  }
   Coefficients k = make_coefficients(target_, std::move(r));
   if (min_error) prefilter(k, threads_, target_.prefilter);
   return k;
+}
+
+std::pair<long, long> scattered_grid(const ScatteredTarget& target) {
+  if (is_hexagonal(target)) {
+    const detail::HexScatteredGrid g = detail::hex_scattered_grid(target);
+    return {g.layout.columns, g.layout.rows};
+  }
+  const Geometry g = geometry(target);
+  return {g.nx, g.ny};
+}
+
+std::uint64_t scattered_bytes(const ScatteredTarget& target, const ScatteredSamples& samples) {
+  const auto [nx, ny] = scattered_grid(target);
+  const int C = samples.channels;
+  const std::uint64_t grid = std::uint64_t(nx) * std::uint64_t(ny) * C;
+  // Cartesian: the sums, the fit's four grids and r, values per sample.
+  // Hexagonal: one grid more (b), values per image in the grid's period
+  // (a sample near the frame's edges has images in the margin).
+  if (is_hexagonal(target)) {
+    const detail::HexScatteredGrid g = detail::hex_scattered_grid(target);
+    const long images = detail::hex_image_count(g, samples, detail::HexImages::Period);
+    return 8 * (7 * grid + std::uint64_t(images) * C);
+  }
+  return 8 * (6 * grid + std::uint64_t(samples.count()) * C);
 }
 
 std::vector<double> evaluate_at_samples(const Coefficients& k, const ScatteredSamples& samples,
@@ -917,18 +979,91 @@ std::vector<double> evaluate_at_samples(const Coefficients& k, const ScatteredSa
   ScatteredTarget t;
   t.width = k.image_width;
   t.height = k.image_height;
-  t.lattice = k.lattice;
-  if (!std::holds_alternative<CartesianSpace>(k.space))
-    throw std::invalid_argument("evaluate_at_samples: Cartesian coefficients only");
-  t.generator = k.kernel();
   t.boundary = k.boundary;
   t.method = k.min_error ? Method::MinError : Method::Conventional;
+  if (std::holds_alternative<HexagonalSpace>(k.space)) {
+    const HexLayout layout = hex_layout(k);
+    detail::HexScatteredGrid g;
+    g.layout = layout;
+    g.spline = &hex_generator(k);
+    g.width = t.width;
+    g.height = t.height;
+    g.boundary = t.boundary;
+    if (!(t.width > 0) || !(t.height > 0))
+      throw std::invalid_argument("evaluate_at_samples: the coefficients' frame is empty");
+    check(samples, t, k.c.channels, threads);
+    std::vector<double> out(std::size_t(samples.count()) * k.c.channels);
+    detail::hex_evaluate_images(g, samples, k.c, detail::HexImages::Sample, out.data(), threads);
+    return out;
+  }
+  t.lattice = k.lattice;
+  t.space = k.space;
   const Geometry g = geometry(t);
   check(samples, t, k.c.channels, threads);
   std::vector<double> out(std::size_t(samples.count()) * k.c.channels);
   evaluate(samples, t, g, k.c, out.data(), threads);
   return out;
 }
+
+namespace {
+
+// The fit's preconditioned conjugate gradients (docs/design.md section 11):
+// G x = b per channel from x, apply_G(v, out) out = G v, precondition(in,
+// out) out ~ G^{-1} in; the report's iterations and residual.
+template <typename ApplyG, typename Precondition>
+void conjugate_gradients(Grid<double>& x, const Grid<double>& b, const ApplyG& apply_G,
+                         const Precondition& precondition, const ScatteredOptions& options,
+                         ScatteredReport& rep) {
+  const int C = x.channels;
+  const long nx = x.width, ny = x.height;
+  Grid<double> r(nx, ny, C), z(nx, ny, C), p(nx, ny, C), q(nx, ny, C);
+  auto dots = [&](const Grid<double>& u, const Grid<double>& v) {
+    std::vector<double> s(C, 0.0);
+    for (std::size_t e = 0; e < u.data.size(); ++e) s[e % C] += u.data[e] * v.data[e];
+    return s;
+  };
+  apply_G(x, q);
+  for (std::size_t e = 0; e < r.data.size(); ++e) r.data[e] = b.data[e] - q.data[e];
+  const std::vector<double> bb = dots(b, b);
+  std::vector<double> rr = dots(r, r);
+  auto done = [&] {
+    for (int c = 0; c < C; ++c)
+      if (rr[c] > options.tolerance * options.tolerance * bb[c]) return false;
+    return true;
+  };
+  precondition(r, z);
+  p.data = z.data;
+  std::vector<double> rz = dots(r, z);
+  int it = 0;
+  while (it < options.iterations && !done()) {
+    apply_G(p, q);
+    const std::vector<double> pq = dots(p, q);
+    std::vector<double> alpha(C, 0.0);
+    for (int c = 0; c < C; ++c) alpha[c] = pq[c] > 0 ? rz[c] / pq[c] : 0.0;
+    for (std::size_t e = 0; e < x.data.size(); ++e) {
+      const int c = int(e % C);
+      x.data[e] += alpha[c] * p.data[e];
+      r.data[e] -= alpha[c] * q.data[e];
+    }
+    ++it;
+    rr = dots(r, r);
+    if (it == options.iterations || done()) break;
+    precondition(r, z);
+    const std::vector<double> rz_new = dots(r, z);
+    for (std::size_t e = 0; e < p.data.size(); ++e) {
+      const int c = int(e % C);
+      const double beta = rz[c] > 0 ? rz_new[c] / rz[c] : 0.0;
+      p.data[e] = z.data[e] + beta * p.data[e];
+    }
+    rz = rz_new;
+  }
+  rep.iterations = it;
+  rep.residual.resize(C);
+  for (int c = 0; c < C; ++c) rep.residual[c] = bb[c] > 0 ? std::sqrt(rr[c] / bb[c]) : 0.0;
+  rep.bytes += (r.data.size() * 5) * sizeof(double);
+}
+
+}  // namespace
 
 Coefficients project_scattered(const ScatteredSamples& samples, const ScatteredTarget& target,
                                const ScatteredOptions& options, ScatteredReport* report) {
@@ -949,74 +1084,59 @@ Coefficients project_scattered(const ScatteredSamples& samples, const ScatteredT
     if (options.iterations < 0 || !(options.tolerance >= 0))
       throw std::invalid_argument(
           "scattered projection: the fit's iterations and tolerance must be >= 0");
-    const Geometry g = geometry(target);
     const int C = samples.channels;
-    const long N = samples.count();
-    const RowPlan rows = plan_rows(samples, g, reach(target.generator), threads);
-    // b = sum_i w_i f_i phi_i,n is the numerator of the pass above.
-    const Grid<double> b = acq.numerator();
-    Grid<double>& x = k.c;
-    Grid<double> r(g.nx, g.ny, C), z(g.nx, g.ny, C), p(g.nx, g.ny, C), q(g.nx, g.ny, C);
-    std::vector<double> at(std::size_t(N) * C);
-    const int degree = target.generator.degree();
-    std::unique_ptr<PrefilterPlan> plan;
-    if (degree > 0)
-      plan = std::make_unique<PrefilterPlan>(degree, g.nx, g.ny, target.boundary, target.prefilter);
-    const double area = g.hx * g.hy;  // G ~ (hx hy) a
-    auto apply_G = [&](const Grid<double>& v, Grid<double>& out) {
-      evaluate(samples, target, g, v, at.data(), threads);
-      std::fill(out.data.begin(), out.data.end(), 0.0);
-      splat(samples, target, g, rows, at.data(), C, out, threads);
-      rep.passes += 2;
-    };
-    auto precondition = [&](const Grid<double>& in, Grid<double>& out) {
-      for (std::size_t e = 0; e < in.data.size(); ++e) out.data[e] = in.data[e] / area;
-      if (plan) plan->execute(out, threads);
-    };
-    auto dots = [&](const Grid<double>& u, const Grid<double>& v) {
-      std::vector<double> s(C, 0.0);
-      for (std::size_t e = 0; e < u.data.size(); ++e) s[e % C] += u.data[e] * v.data[e];
-      return s;
-    };
-    apply_G(x, q);
-    for (std::size_t e = 0; e < r.data.size(); ++e) r.data[e] = b.data[e] - q.data[e];
-    const std::vector<double> bb = dots(b, b);
-    std::vector<double> rr = dots(r, r);
-    auto done = [&] {
-      for (int c = 0; c < C; ++c)
-        if (rr[c] > options.tolerance * options.tolerance * bb[c]) return false;
-      return true;
-    };
-    precondition(r, z);
-    p.data = z.data;
-    std::vector<double> rz = dots(r, z);
-    int it = 0;
-    while (it < options.iterations && !done()) {
-      apply_G(p, q);
-      const std::vector<double> pq = dots(p, q);
-      std::vector<double> alpha(C, 0.0);
-      for (int c = 0; c < C; ++c) alpha[c] = pq[c] > 0 ? rz[c] / pq[c] : 0.0;
-      for (std::size_t e = 0; e < x.data.size(); ++e) {
-        const int c = int(e % C);
-        x.data[e] += alpha[c] * p.data[e];
-        r.data[e] -= alpha[c] * q.data[e];
-      }
-      ++it;
-      rr = dots(r, r);
-      if (it == options.iterations || done()) break;
-      precondition(r, z);
-      const std::vector<double> rz_new = dots(r, z);
-      for (std::size_t e = 0; e < p.data.size(); ++e) {
-        const int c = int(e % C);
-        const double beta = rz[c] > 0 ? rz_new[c] / rz[c] : 0.0;
-        p.data[e] = z.data[e] + beta * p.data[e];
-      }
-      rz = rz_new;
+    if (is_hexagonal(target)) {
+      // The model: the coefficients periodic on their grid; the data: the
+      // samples' images in one period (hex_scattered.h, Period). b is their
+      // splat, not the pass's numerator (which sums every image the grid
+      // acquisition would).
+      const detail::HexScatteredGrid g = detail::hex_scattered_grid(target);
+      const long images = detail::hex_image_count(g, samples, detail::HexImages::Period);
+      const long nx = k.c.width, ny = k.c.height;
+      Grid<double> b(nx, ny, C);
+      detail::hex_splat(g, samples, samples.values.data(), C, false, detail::HexImages::Period, b,
+                        threads);
+      rep.passes += 1;
+      std::vector<double> at(std::size_t(images) * C);
+      const HexPrefilterPlan plan(g.spline->order(), nx, ny);
+      const double area = std::abs(g.layout.lattice.determinant());  // G ~ |det L| a
+      auto apply_G = [&](const Grid<double>& v, Grid<double>& out) {
+        detail::hex_evaluate_images(g, samples, v, detail::HexImages::Period, at.data(), threads);
+        std::fill(out.data.begin(), out.data.end(), 0.0);
+        detail::hex_splat(g, samples, at.data(), C, true, detail::HexImages::Period, out, threads);
+        rep.passes += 2;
+      };
+      auto precondition = [&](const Grid<double>& in, Grid<double>& out) {
+        for (std::size_t e = 0; e < in.data.size(); ++e) out.data[e] = in.data[e] / area;
+        plan.execute(out, threads);
+      };
+      conjugate_gradients(k.c, b, apply_G, precondition, options, rep);
+      rep.bytes += b.data.size() * sizeof(double) + at.size() * sizeof(double);
+    } else {
+      const Geometry g = geometry(target);
+      const long N = samples.count();
+      const RowPlan rows = plan_rows(samples, g, reach(kernel_of(target)), threads);
+      // b = sum_i w_i f_i phi_i,n is the numerator of the pass above.
+      const Grid<double> b = acq.numerator();
+      std::vector<double> at(std::size_t(N) * C);
+      const int degree = kernel_of(target).degree();
+      std::unique_ptr<PrefilterPlan> plan;
+      if (degree > 0)
+        plan = std::make_unique<PrefilterPlan>(degree, g.nx, g.ny, target.boundary, target.prefilter);
+      const double area = g.hx * g.hy;  // G ~ (hx hy) a
+      auto apply_G = [&](const Grid<double>& v, Grid<double>& out) {
+        evaluate(samples, target, g, v, at.data(), threads);
+        std::fill(out.data.begin(), out.data.end(), 0.0);
+        splat(samples, target, g, rows, at.data(), C, out, threads);
+        rep.passes += 2;
+      };
+      auto precondition = [&](const Grid<double>& in, Grid<double>& out) {
+        for (std::size_t e = 0; e < in.data.size(); ++e) out.data[e] = in.data[e] / area;
+        if (plan) plan->execute(out, threads);
+      };
+      conjugate_gradients(k.c, b, apply_G, precondition, options, rep);
+      rep.bytes += at.size() * sizeof(double);
     }
-    rep.iterations = it;
-    rep.residual.resize(C);
-    for (int c = 0; c < C; ++c) rep.residual[c] = bb[c] > 0 ? std::sqrt(rr[c] / bb[c]) : 0.0;
-    rep.bytes += (r.data.size() * 5) * sizeof(double) + at.size() * sizeof(double);
   }
   if (report) *report = rep;
   return k;

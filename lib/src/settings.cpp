@@ -373,10 +373,6 @@ Formed form_scattered(const Settings& o, const Resolved& r, ScatteredInput in, c
     throw RequestError((o.size.empty() ? std::string("--size") : "--size " + o.size) + ": " + label +
                        ": scattered samples need the frame as --size WxH in pixels (the "
                        "positions' coordinates; no side from an aspect or a percentage)");
-  if (space_name(r.space) != "cartesian")
-    throw RequestError("--lattice " + o.lattice + ": " + label +
-                       ": scattered samples are projected onto the Cartesian lattice only (no "
-                       "scattered rule on the hexagonal lattice yet)");
   if (r.clamp == Clamp::Local)
     throw RequestError("--clamp local: " + label +
                        ": scattered samples have no local range (the range of a grid's samples "
@@ -396,15 +392,24 @@ Formed form_scattered(const Settings& o, const Resolved& r, ScatteredInput in, c
   ScatteredTarget target;
   target.width = double(f.width);
   target.height = double(f.height);
-  target.generator = std::get<CartesianSpace>(r.space).generator;
+  target.space = r.space;
   target.boundary = r.boundary;
   target.method = r.method;
   target.prefilter = r.prefilter;
-  // the coefficients, the fit's four working grids and per-sample values, the output
-  const std::uint64_t grid = std::uint64_t(f.width) * std::uint64_t(f.height) * C;
-  f.estimated_bytes = projection_bytes(f.width, f.height, C, std::uint64_t(f.width) * f.height,
+  // the coefficients (the space's grid: on the hexagonal lattice its margin
+  // too), the rule's working grids and values, the output
+  std::pair<long, long> extent;
+  std::uint64_t working = 0;
+  try {
+    extent = scattered_grid(target);
+    working = scattered_bytes(target, in.samples);
+  } catch (const std::invalid_argument& e) {
+    throw RequestError(label + ": " + e.what());
+  }
+  f.estimated_bytes = projection_bytes(f.width, f.height, C,
+                                       std::uint64_t(extent.first) * std::uint64_t(extent.second),
                                        false, fr.coefficient_file, threads) +
-                      8 * (6 * grid + std::uint64_t(n) * C);
+                      working;
   check_memory(f.estimated_bytes, "the projection of " + std::to_string(n) + " scattered samples to " +
                                       std::to_string(f.width) + " x " + std::to_string(f.height) +
                                       " x " + std::to_string(C));

@@ -176,7 +176,6 @@ def _with(array, index, value):
 BAD = [
     (dict(values=_V, positions=_P), "size=: scattered samples need the frame"),
     (dict(values=_V, positions=_P, factor=2), "factor=: scattered samples have no grid"),
-    (dict(values=_V, positions=_P, size=8, lattice="hex"), "lattice='hex': scattered samples are projected onto the Cartesian lattice only"),
     (dict(values=_V, positions=_P[:, :1], size=8), r"positions: expected \(N, 2\)"),
     (dict(values=_V, positions=_P[:-1], size=8), "positions: 63 rows for 64 samples"),
     (dict(values=_V.reshape(8, 8, 3), positions=_P, size=8), r"values: with positions=, expected \(N,\) or \(N, channels\)"),
@@ -346,7 +345,6 @@ def test_bad_position_channel_files_exit_non_zero_naming_the_file(tmp_path):
     for options, message in [
             (["--factor", "2"], "--factor: good.exr: scattered samples have no grid to divide"),
             (["--scale", "0.5"], "--scale: good.exr: scattered samples have no grid"),
-            (["--size", "20x14", "--lattice", "hex"], "--lattice hex: good.exr: scattered samples are projected onto the Cartesian lattice only"),
             (["--size", "20x14", "--partial"], "good.exr: a file of scattered samples .* has no row bands; --partial takes a grid's bands"),
             (["--size", "20x14", "--merge"], "--merge: good.exr is not a partial file"),
             (["--size", "20", "--rule", "fit"], "--size 20: good.exr: scattered samples need the frame as --size WxH in pixels"),
@@ -367,3 +365,49 @@ def test_bad_position_channel_files_exit_non_zero_naming_the_file(tmp_path):
     r = siproject_run(tmp_path / "nan-value.exr", "-o", tmp_path / "out.exr", "--size", "20x14",
                       "--nonfinite", "zero")
     assert r.returncode == 0 and "replaced 1 non-finite values with 0" in r.stderr
+
+
+@pytest.mark.parametrize("generator", ["hex-hat", "hex-quartic"])
+@pytest.mark.parametrize("rule", ["fit", "normalised"])
+def test_an_oiiotool_file_of_a_flat_image_stays_flat_on_the_hexagonal_lattice(tmp_path, rule, generator):
+    # A file written by OpenImageIO's oiiotool: 64 x 48 samples of a flat
+    # colour, their positions a gradient across a 20 x 14 frame plus
+    # OpenImageIO's seeded uniform noise (so not a grid), in float.
+    samples = tmp_path / "samples.exr"
+    r = subprocess.run(
+        ["oiiotool", "--pattern", "constant:color=0.3,0.6,0.9", "64x48", "3",
+         "--pattern", "fill:left=0.05:right=19.6", "64x48", "1",
+         "--pattern", "noise:type=uniform:min=0:max=0.35:seed=3", "64x48", "1", "--add",
+         "--pattern", "fill:top=0.05:bottom=13.6", "64x48", "1",
+         "--pattern", "noise:type=uniform:min=0:max=0.35:seed=4", "64x48", "1", "--add",
+         "--chappend", "--chappend", "--chnames", "R,G,B,pFilm.x,pFilm.y", "-d", "float",
+         "-o", str(samples)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    out = tmp_path / "out.exr"
+    coeffs = tmp_path / "coeffs.exr"
+    r = siproject_run(samples, "-o", out, "--size", "20x14", "--lattice", "hex", "--generator",
+                      generator, "--rule", rule, "-d", "float", "--coeffs", coeffs)
+    assert r.returncode == 0, r.stderr
+    image = siproject.read_image(out)
+    assert image.shape == (14, 20, 3)
+    want = np.array([0.3, 0.6, 0.9], np.float32)
+    # The coefficients are the colour to double rounding (normalised sums,
+    # the hexagonal prefilter's FFT, the fit's residual zero from its start)
+    # kept in float; the 2x2 display sums the box spline's weights (1 to
+    # rounding) in double and rounds to float: within one ulp of float.
+    assert np.abs(image - want).max() <= np.spacing(want).max()
+    # the coefficient file is a hexagonal grid's, flat, and evaluates to the
+    # same image without the samples
+    k = siproject.load(coeffs)
+    assert (k.lattice, k.generator) == ("hexagonal", generator)
+    assert np.abs(k.array - want).max() <= np.spacing(want).max()
+    again = tmp_path / "again.exr"
+    r = siproject_run(coeffs, "-o", again, "-d", "float")
+    assert r.returncode == 0, r.stderr
+    assert np.array_equal(siproject.read_image(again), image)
+    # the module, on the same samples as arrays, gives the tool's image
+    pix = siproject.read_image(samples)
+    values, positions = pix[..., :3].reshape(-1, 3), pix[..., 3:].reshape(-1, 2).astype(np.float64)
+    module = siproject.project(values, positions=positions, size=(20, 14), lattice="hex",
+                               generator=generator, rule=rule)
+    assert np.array_equal(module, image)

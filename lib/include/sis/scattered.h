@@ -1,7 +1,8 @@
 #pragma once
 // Projection from scattered samples (docs/design.md section 11): samples at
 // any places in the frame, each weighing the area it stands for, projected
-// onto a Cartesian shift-invariant space. Two min-error rules, both exact for
+// onto a shift-invariant space of either lattice (sis/space.h): the Cartesian
+// space or the hexagonal box-spline space. Two min-error rules, both exact for
 // a flat image at any positions and tending to the orthogonal projection as
 // the samples densify:
 //   NormalisedSum: r[n] = sum_i w_i f_i phi_i,n / sum_i w_i phi_i,n * int phi,
@@ -16,13 +17,20 @@
 // the normalised weighted average p[n] = sum_i w_i f_i K_i,n / sum_i w_i K_i,n.
 // phi_i,n = phi((x_i - x_n) / h): only the frame's edges fold, by the
 // boundary rule, as the grid acquisition folds them (the samples' mirror or
-// periodic images).
+// periodic images). On the hexagonal lattice, as its grid acquisition
+// (sis/hex_acquisition.h): every stored coefficient, margin included, sums
+// every image of the samples in its support, and the fit's model is the
+// coefficients periodic on their offset-row grid (sis/hex_lattice.h), fitted
+// to the images in one period of it (docs/design.md section 11).
 #include <cstddef>
+#include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sis/coefficients.h"
 #include "sis/acquisition.h"
+#include "sis/space.h"
 #include "sis/image.h"
 #include "sis/prefilter.h"
 
@@ -52,13 +60,18 @@ enum class ScatteredRule { NormalisedSum, LeastSquares, PlainSum };
 const char* scattered_rule_name(ScatteredRule rule);  // "normalised" | "fit" | "plain"
 ScatteredRule parse_scattered_rule(const std::string& spelling);
 
-// The target space: a frame of width x height output pixels, a Cartesian
-// lattice tiling it (coefficient n at (n + 1/2) h), a generator, a boundary
-// rule and a method. Min-error needs a B-spline generator.
+// The target space: a frame of width x height output pixels and a space
+// with its generator, a boundary rule and a method. CartesianSpace: the
+// separable `lattice` tiles the frame (coefficient n at (n + 1/2) h);
+// min-error needs a B-spline generator. HexagonalSpace: the offset-row grid
+// hex_layout(density, width, height, margin) gives (`lattice` unused;
+// margin -1: hex_default_margin(order)), the coefficients laid out as the
+// grid acquisition lays them; min-error only.
 struct ScatteredTarget {
   double width = 0, height = 0;
+  Space space = CartesianSpace{Kernel::bspline(3)};
   Lattice lattice = Lattice::cartesian();
-  Kernel generator = Kernel::bspline(3);
+  int margin = -1;
   Boundary boundary = Boundary::Mirror;
   Method method = Method::MinError;
   PrefilterMethod prefilter = PrefilterMethod::FFT;
@@ -124,8 +137,18 @@ Coefficients project_scattered(const ScatteredSamples& samples, const ScatteredT
                                const ScatteredOptions& options = {},
                                ScatteredReport* report = nullptr);
 
-// f_app of the target's space at every sample (channel fastest): what the
-// fit's residual is measured with.
+// The coefficient grid's columns and rows for the target (the frame's
+// lattice extent; on the hexagonal lattice the offset-row grid with its
+// margin); std::invalid_argument for a target that cannot be projected.
+std::pair<long, long> scattered_grid(const ScatteredTarget& target);
+// The bytes the fit's working grids and values at the samples take (the
+// one-pass rules take less), from the samples' count and, on the hexagonal
+// lattice, their images (positions not checked: a bad one has none).
+std::uint64_t scattered_bytes(const ScatteredTarget& target, const ScatteredSamples& samples);
+
+// f_app of the coefficients' space at every sample (channel fastest): what
+// the fit's residual is measured with. Hexagonal coefficients are periodic
+// on their grid (hex_evaluate's rule).
 std::vector<double> evaluate_at_samples(const Coefficients& k, const ScatteredSamples& samples,
                                         int threads = 1);
 

@@ -286,10 +286,6 @@ def _form(input, coefficients_only, *, size, output_shape, factor, generator, me
             raise ValueError("size=: scattered samples need the frame, size=(width, height) (or "
                              "output_shape=(rows, cols)) in output pixels, the positions' "
                              "coordinates")
-        if _text("lattice", lattice).lower() in ("hex", "hexagonal"):
-            raise ValueError(f"lattice={lattice!r}: scattered samples are projected onto the "
-                             f"Cartesian lattice only (no scattered rule on the hexagonal "
-                             f"lattice yet)")
         samples, p, w = _scattered(input, positions, weights)
     result = _core._form(
         samples,
@@ -357,7 +353,8 @@ def project(input: Input, *, size: Optional[Size] = None,
         channels) (the types of an array input, by the same rule), and
         positions an (N, 2) array of (x, y) in frame coordinates (output
         pixels: pixel (i, j) covers [i, i+1) x [j, j+1)); the frame is size
-        (or output_shape), required; factor and lattice="hex" are refused.
+        (or output_shape), required; factor is refused. Either lattice:
+        lattice="hex" projects onto the hexagonal box-spline space.
         weights: (N,), the area in output pixels^2 each sample stands for
         (None: the frame's area / N each). rule: "fit" (weighted least
         squares, None's default), "normalised" or "plain", as siproject's
