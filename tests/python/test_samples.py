@@ -83,8 +83,9 @@ def write_pattern_render(path, values, w, h, attributes):
         f.write(str(path))
 
 
+@pytest.mark.parametrize("lattice", ["cartesian", "hex"])
 @pytest.mark.parametrize("pattern", ["regular", "jitter", "sobol"])
-def test_a_pattern_render_is_its_values_at_sample_positions(tmp_path, pattern):
+def test_a_pattern_render_is_its_values_at_sample_positions(tmp_path, pattern, lattice):
     W, H, r = 24, 16, 6.25  # factor 2.5: a 60 x 40 grid
     xy = siproject.sample_positions(pattern, seed=3, size=(W, H), rays_per_pixel=r)
     assert len(xy) == 60 * 40
@@ -94,11 +95,11 @@ def test_a_pattern_render_is_its_values_at_sample_positions(tmp_path, pattern):
     path = tmp_path / "render.exr"
     write_pattern_render(path, values, 60, 40, {"sis:pattern": pattern, "sis:pattern_seed": "3",
                                                 "sis:pattern_frame": f"{W}x{H}", "sis:pattern_factor": "2.5"})
-    expected = siproject.project(values, positions=xy, size=(W, H))
-    assert np.array_equal(siproject.project(str(path), size=(W, H)), expected)
-    assert np.array_equal(siproject.project(str(path), factor=2.5), expected)
+    expected = siproject.project(values, positions=xy, size=(W, H), lattice=lattice)
+    assert np.array_equal(siproject.project(str(path), size=(W, H), lattice=lattice), expected)
+    assert np.array_equal(siproject.project(str(path), factor=2.5, lattice=lattice), expected)
     out = tmp_path / "out.exr"
-    run = subprocess.run([SIPROJECT, str(path), "-o", str(out), "--size", f"{W}x{H}"],
+    run = subprocess.run([SIPROJECT, str(path), "-o", str(out), "--size", f"{W}x{H}", "--lattice", lattice],
                          capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert np.array_equal(siproject.read_image(out), expected.astype(np.float16).astype(np.float32))
