@@ -74,6 +74,13 @@ inline std::vector<double> dense_solve(std::vector<double> A, std::vector<double
   }
   return x;
 }
+// The same, A given by rows.
+inline std::vector<double> dense_solve(const std::vector<std::vector<double>>& rows,
+                                       std::vector<double> y) {
+  std::vector<double> A;
+  for (const std::vector<double>& row : rows) A.insert(A.end(), row.begin(), row.end());
+  return dense_solve(std::move(A), std::move(y));
+}
 
 struct Result {
   int status;

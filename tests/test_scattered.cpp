@@ -17,9 +17,12 @@
 #include "sis/prefilter.h"
 #include "sis/projection.h"
 #include "sis/scattered.h"
+#include "support.h"
 
 namespace sis {
 namespace {
+
+using test::dense_solve;
 
 const Kernel& generator_of(const ScatteredTarget& t) {
   return std::get<CartesianSpace>(t.space).generator;
@@ -105,30 +108,6 @@ Coefficients normalised_reference(const ScatteredSamples& s, const ScatteredTarg
   }
   prefilter(k);
   return k;
-}
-
-// Solves A x = y by Gaussian elimination with partial pivoting.
-std::vector<double> dense_solve(std::vector<std::vector<double>> A, std::vector<double> y) {
-  const std::size_t n = y.size();
-  for (std::size_t k = 0; k < n; ++k) {
-    std::size_t p = k;
-    for (std::size_t i = k + 1; i < n; ++i)
-      if (std::abs(A[i][k]) > std::abs(A[p][k])) p = i;
-    std::swap(A[k], A[p]);
-    std::swap(y[k], y[p]);
-    for (std::size_t i = k + 1; i < n; ++i) {
-      const double f = A[i][k] / A[k][k];
-      for (std::size_t j = k; j < n; ++j) A[i][j] -= f * A[k][j];
-      y[i] -= f * y[k];
-    }
-  }
-  std::vector<double> x(n);
-  for (std::size_t k = n; k-- > 0;) {
-    double s = y[k];
-    for (std::size_t j = k + 1; j < n; ++j) s -= A[k][j] * x[j];
-    x[k] = s / A[k][k];
-  }
-  return x;
 }
 
 ScatteredOptions normalised() {

@@ -12,6 +12,7 @@
 #include <variant>
 
 #include "sis/parallel.h"
+#include "value_width.h"
 
 namespace sis {
 namespace detail {
@@ -308,18 +309,6 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) void evaluate_block
   }
 }
 
-// f(std::integral_constant<int, A>) for A in 1..5, else with 0.
-template <typename F>
-void with_width(int A, F&& f) {
-  switch (A) {
-    case 1: return f(std::integral_constant<int, 1>{});
-    case 2: return f(std::integral_constant<int, 2>{});
-    case 3: return f(std::integral_constant<int, 3>{});
-    case 4: return f(std::integral_constant<int, 4>{});
-    case 5: return f(std::integral_constant<int, 5>{});
-    default: return f(std::integral_constant<int, 0>{});
-  }
-}
 
 }  // namespace
 

@@ -16,6 +16,7 @@
 #include "hex_scattered.h"
 #include "sis/hex_prefilter.h"
 #include "sis/parallel.h"
+#include "value_width.h"
 
 namespace sis {
 namespace {
@@ -636,19 +637,6 @@ struct is_poly : std::false_type {};
 template <int K>
 struct is_poly<PolyTaps<K>> : std::true_type {};
 
-// Calls f(std::integral_constant<int, A>) for A in 1..5, or with 0 for any
-// other A.
-template <typename F>
-void with_width(int A, F&& f) {
-  switch (A) {
-    case 1: return f(std::integral_constant<int, 1>{});
-    case 2: return f(std::integral_constant<int, 2>{});
-    case 3: return f(std::integral_constant<int, 3>{});
-    case 4: return f(std::integral_constant<int, 4>{});
-    case 5: return f(std::integral_constant<int, 5>{});
-    default: return f(std::integral_constant<int, 0>{});
-  }
-}
 
 // How the coefficient rows are split among threads for the splats: strip p
 // is rows [strips[p], strips[p + 1]); a thread visits the blocks of samples
