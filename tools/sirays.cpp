@@ -638,7 +638,7 @@ int main(int argc, char** argv) {
                            std::to_string(pat.grid_height()) + " (the grid's rows)");
       }
       if (fs::path(output).extension() != ".pov") throw UsageError("-o " + output + ": a band's scene ends in .pov");
-      write_mesh(scene, output, pat, y0, y1, threads > 0 ? threads : int(std::thread::hardware_concurrency()));
+      write_mesh(scene, output, pat, y0, y1, threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency())));
     } else {
       assemble(bands, output, pat, row_bug);
     }

@@ -362,9 +362,11 @@ Formed form_scattered(const Settings& o, const Resolved& r, ScatteredInput in, c
         output_size(o, r, in.pattern->grid_width(), in.pattern->grid_height());
     const double sx = double(f_size.first) / double(in.pattern->width),
                  sy = double(f_size.second) / double(in.pattern->height);
-    if (sx != 1 || sy != 1)
+    if (sx != 1 || sy != 1) {
       for (std::size_t q = 0; q < in.samples.positions.size(); q += 2)
         in.samples.positions[q] *= sx, in.samples.positions[q + 1] *= sy;
+      for (double& w : in.samples.weights) w *= sx * sy;  // areas, in the output's pixels^2
+    }
   } else if (o.factor || o.scale)
     throw RequestError(std::string(o.factor ? "--factor" : "--scale") + ": " + label +
                        ": scattered samples have no grid to divide or scale; give the frame with "

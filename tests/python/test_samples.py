@@ -112,3 +112,32 @@ def test_a_pattern_render_of_the_wrong_size_is_refused(tmp_path):
                                                 "sis:pattern_frame": "24x16", "sis:pattern_factor": "2.5"})
     with pytest.raises(OSError, match="is 50 x 40 samples, but its pattern \\(jitter, frame 24x16, factor 2.5\\) has 60 x 40"):
         siproject.project(str(path), size=(24, 16))
+
+
+def test_a_pattern_renders_weights_follow_its_positions_onto_the_output(tmp_path):
+    # A weight channel holds each sample's area in the pattern frame's
+    # pixels^2; projected onto a frame of another size, the areas scale with
+    # the positions: the plain sum (which is not invariant to the weights'
+    # scale) equals the file without weights, whose default is the output
+    # frame's area / count. 1e-6 of the largest value: the weight channel stores the area in
+    # float32 (rounded at 6e-8 relative) and the results are float32; left
+    # unscaled, the weights would make the (48, 32) result 4 times smaller.
+    W, H, r = 24, 16, 6.25
+    xy = siproject.sample_positions("jitter", seed=2, size=(W, H), rays_per_pixel=r)
+    values = (0.5 + 0.3 * np.sin(xy[:, :1] * [0.7, 1.1, 0.5] + xy[:, 1:] * [0.4, 0.9, 1.3])).astype(np.float32)
+    keys = {"sis:pattern": "jitter", "sis:pattern_seed": "2", "sis:pattern_frame": f"{W}x{H}",
+            "sis:pattern_factor": "2.5"}
+    plain = tmp_path / "plain.exr"
+    write_pattern_render(plain, values, 60, 40, keys)
+    weighted = tmp_path / "weighted.exr"
+    area = np.full((40, 60), W * H / len(xy), np.float32)
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage, **keys}
+    channels = {c: np.ascontiguousarray(values[:, k].reshape(40, 60)) for k, c in enumerate("RGB")}
+    channels["weight"] = area
+    with OpenEXR.File(header, channels) as f:
+        f.write(str(weighted))
+    for size in [(48, 32), (W, H)]:
+        want = siproject.project(str(plain), size=size, rule="plain")
+        got = siproject.project(str(weighted), size=size, rule="plain")
+        assert np.abs(want).max() > 0.1, size
+        assert np.allclose(got, want, rtol=0, atol=1e-6 * np.abs(want).max()), size
