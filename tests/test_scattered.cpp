@@ -17,31 +17,20 @@
 #include "sis/prefilter.h"
 #include "sis/projection.h"
 #include "sis/scattered.h"
+#include "scattered_samples.h"
 #include "support.h"
 
 namespace sis {
 namespace {
 
 using test::dense_solve;
+using test::jittered;
+using test::random_samples;
+using test::smooth;
+using test::uniform;
 
 const Kernel& generator_of(const ScatteredTarget& t) {
   return std::get<CartesianSpace>(t.space).generator;
-}
-
-double uniform(std::mt19937_64& g) { return double(g() >> 11) * 0x1p-53; }
-
-ScatteredSamples random_samples(long n, int channels, double W, double H, std::uint64_t seed,
-                                bool weighted = false) {
-  std::mt19937_64 g(seed);
-  ScatteredSamples s;
-  s.channels = channels;
-  for (long i = 0; i < n; ++i) {
-    s.positions.push_back(W * uniform(g));
-    s.positions.push_back(H * uniform(g));
-    for (int c = 0; c < channels; ++c) s.values.push_back(uniform(g) - 0.3);
-    if (weighted) s.weights.push_back(0.5 + uniform(g));
-  }
-  return s;
 }
 
 ScatteredTarget target(double W, double H, int degree, Boundary b) {
@@ -299,8 +288,6 @@ TEST(Scattered, FitReproducesASplineOfTheSpace) {
   }
 }
 
-double smooth(double x, double y) { return 0.5 + 0.3 * std::sin(0.9 * x + 0.4) * std::cos(0.7 * y); }
-
 TEST(Scattered, GridPositionsGiveTheGridResult) {
   for (const Case& cs : cases()) {
     const long W = 10, H = 8;
@@ -328,22 +315,6 @@ TEST(Scattered, GridPositionsGiveTheGridResult) {
       EXPECT_LT(max_abs_diff(got.c, grid.c), 1e-13) << name(cs) << " factor " << s;
     }
   }
-}
-
-// Jittered samples, s x s per pixel (one uniform in each cell of the
-// s-grid), of the smooth image.
-ScatteredSamples jittered(long W, long H, int s, std::uint64_t seed) {
-  std::mt19937_64 g(seed);
-  ScatteredSamples smp;
-  for (long j = 0; j < H * s; ++j)
-    for (long i = 0; i < W * s; ++i) {
-      const double x = (i + uniform(g)) / s, y = (j + uniform(g)) / s;
-      smp.positions.push_back(x);
-      smp.positions.push_back(y);
-      smp.values.push_back(smooth(x, y));
-      smp.weights.push_back(1.0 / (s * s));
-    }
-  return smp;
 }
 
 TEST(Scattered, ConvergesToTheGridProjectionAsDensityGrows) {

@@ -1,0 +1,52 @@
+#pragma once
+// Scattered samples for the scattered tests of both lattices: uniform
+// random positions and values, and jittered samples of a smooth image.
+#include <cmath>
+#include <cstdint>
+#include <random>
+
+#include "sis/scattered.h"
+
+namespace sis::test {
+
+// Uniform in [0, 1), 53 bits.
+inline double uniform(std::mt19937_64& g) { return double(g() >> 11) * 0x1p-53; }
+
+// n samples at uniform positions in [0, W] x [0, H], `channels` values in
+// [-0.3, 0.7) each, and weights in [0.5, 1.5) where `weighted`.
+inline ScatteredSamples random_samples(long n, int channels, double W, double H,
+                                       std::uint64_t seed, bool weighted = false) {
+  std::mt19937_64 g(seed);
+  ScatteredSamples s;
+  s.channels = channels;
+  for (long i = 0; i < n; ++i) {
+    s.positions.push_back(W * uniform(g));
+    s.positions.push_back(H * uniform(g));
+    for (int c = 0; c < channels; ++c) s.values.push_back(uniform(g) - 0.3);
+    if (weighted) s.weights.push_back(0.5 + uniform(g));
+  }
+  return s;
+}
+
+// A smooth image.
+inline double smooth(double x, double y) {
+  return 0.5 + 0.3 * std::sin(0.9 * x + 0.4) * std::cos(0.7 * y);
+}
+
+// Jittered samples, s x s per pixel (one uniform in each cell of the
+// s-grid), of the smooth image.
+inline ScatteredSamples jittered(long W, long H, int s, std::uint64_t seed) {
+  std::mt19937_64 g(seed);
+  ScatteredSamples smp;
+  for (long j = 0; j < H * s; ++j)
+    for (long i = 0; i < W * s; ++i) {
+      const double x = (i + uniform(g)) / s, y = (j + uniform(g)) / s;
+      smp.positions.push_back(x);
+      smp.positions.push_back(y);
+      smp.values.push_back(smooth(x, y));
+      smp.weights.push_back(1.0 / (s * s));
+    }
+  return smp;
+}
+
+}  // namespace sis::test
