@@ -551,7 +551,10 @@ int main(int argc, char** argv) try {
       "any --display. An OpenEXR file with position channels pFilm.x, pFilm.y holds\n"
       "scattered samples, one per pixel in any layout: each at its (x, y) in output\n"
       "pixels, weighing its \"weight\" channel (else the frame's area / N), the other\n"
-      "channels its values, projected onto the frame --size WxH gives (--rule).\n"
+      "channels its values, projected onto the frame --size WxH gives (--rule). A\n"
+      "render whose metadata names a sample pattern (sis:pattern, written by sirays\n"
+      "assemble) holds scattered samples at that pattern's positions, and takes\n"
+      "--factor, --scale and --size as a grid does.\n"
       "Outputs replace a file only once written whole.\n"
       "Exit status: 0 success, 1 out of memory, 2 usage, 3 input, 4 output.",
       "siproject"};
