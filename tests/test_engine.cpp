@@ -186,6 +186,22 @@ TEST_F(Engine, CoefficientsDescribeThemselves) {
     EXPECT_TRUE(same_bits(std::vector<float>(g.image.data.begin(), g.image.data.end()),
                           std::vector<float>(f.image.data.begin(), f.image.data.end())))
         << what;
+
+    // an alpha channel under a name no reader takes for alpha keeps its role
+    Coefficients layer = k;
+    layer.channel_names = {"diffuse.R", "diffuse.G", "diffuse.B", "diffuse.mask"};
+    write_coefficients(file, layer);
+    const Coefficients again = load_coefficients(file, false);
+    EXPECT_EQ(again.channel_names, layer.channel_names) << what;
+    EXPECT_EQ(again.alpha, 3) << what;
+    const FinalImage h = final_image(again, shown, 24, 18, Clamp::None, nullptr, 1);
+    EXPECT_TRUE(same_bits(std::vector<float>(h.image.data.begin(), h.image.data.end()),
+                          std::vector<float>(f.image.data.begin(), f.image.data.end())))
+        << what;
+    // and no alpha stays none, whatever the names
+    layer.alpha = -1;
+    write_coefficients(file, layer);
+    EXPECT_EQ(load_coefficients(file, false).alpha, -1) << what;
   }
 }
 

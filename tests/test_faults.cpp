@@ -652,6 +652,9 @@ TEST_F(Faults, CoefficientFileMetadataIsChecked) {
       {"sis:lattice_matrix '-1 0 0 1'", "sis:lattice"},
       {"sis:lattice_origin '1e30 0'", "sis:lattice_origin"},
       {"sis:image_width nan", "sis:image_width"},
+      {"sis:alpha 3", "sis:alpha"},
+      {"sis:alpha -1", "sis:alpha"},
+      {"sis:alpha 1x", "sis:alpha"},
   };
   for (const auto& [edit, key] : edits) {
     const Result e = shell("oiiotool " + path("c.exr") + " --attrib " + edit + " -o " + path("e.exr"));

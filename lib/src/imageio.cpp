@@ -16,6 +16,7 @@
 #include <cerrno>
 
 #include <algorithm>
+#include <charconv>
 #include <array>
 #include <atomic>
 #include <cctype>
@@ -534,7 +535,12 @@ Transfer default_transfer(bool integer_samples, const std::string& colorspace, d
 std::string ImageReader::format_name() const { return impl_->format; }
 std::vector<std::string> ImageReader::channel_names() const { return impl_->spec.channelnames; }
 std::string ImageReader::attribute(const std::string& name) const {
-  const std::string named = impl_->spec.get_string_attribute(name);
+  // a key another tool typed as a number (oiiotool --attrib guesses types)
+  // is read as the text of its value
+  const OIIO::ParamValue* p = impl_->spec.find_attribute(name);
+  const std::string named = p ? (p->type() == TypeDesc::STRING ? std::string(p->get_ustring().string())
+                                                               : p->get_string())
+                              : std::string();
   if (!named.empty()) return named;
   // formats that carry the keys as key=value lines of their description
   // (TIFF, JPEG, HEIF: stage_image writes them there)
@@ -1460,13 +1466,17 @@ StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
       {"sis:input_transfer", k.input.transfer.name()},
       {"sis:highlight_compress", k.highlight_compressed ? "1" : "0"},
   });
+  // the alpha channel by index (a name the reader does not take for alpha,
+  // such as a layer's "diffuse.A", keeps its role)
+  if (k.alpha >= 0 && k.alpha < k.c.channels) md.push_back({"sis:alpha", std::to_string(k.alpha)});
   for (const auto& [key, value] : extra) {
     bool replaced = false;
     for (auto& kv : md)
       if (kv.first == key) kv.second = value, replaced = true;
     if (!replaced) md.push_back({key, value});
   }
-  return stage_image(path, grid, channel_names.empty() ? k.channel_names : channel_names, md);
+  return stage_image(path, grid, channel_names.empty() ? k.channel_names : channel_names, md,
+                     k.alpha);
 }
 
 namespace {
@@ -1541,6 +1551,16 @@ Coefficients read_coefficients(ImageReader& r) {
   k.c = Grid<double>(grid.width, grid.height, grid.channels);
   k.channel_names = r.channel_names();
   k.alpha = r.alpha_channel();
+  if (const std::string a = r.attribute("sis:alpha"); !a.empty()) {
+    long channel = -1;
+    const auto [end, ec] = std::from_chars(a.data(), a.data() + a.size(), channel);
+    if (ec != std::errc() || end != a.data() + a.size() || channel < 0 ||
+        channel >= k.c.channels)
+      throw InputError(r.path() + ": coefficient file metadata: sis:alpha '" + a +
+                       "': expected a channel index in [0, " + std::to_string(k.c.channels - 1) +
+                       "]");
+    k.alpha = int(channel);
+  }
   for (std::size_t q = 0; q < grid.data.size(); ++q) k.c.data[q] = grid.data[q];
   try {
     visit_space(k, [&](auto space) { space.check_grid(k); });
