@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# cluster.sh start [DIR] | stop DIR | env DIR
+# cluster.sh start [--cpus N] [DIR] | stop DIR | env DIR
 #
 # A one-node Slurm cluster on this machine, everything in one folder: for the
 # farm test and for trying FARM=slurm without a cluster. As root (munged,
@@ -9,7 +9,10 @@
 #                key and slurm.conf (two free TCP ports, this host as the one
 #                node with all its CPUs), start munged, slurmctld and slurmd
 #                with their sockets, state, spool, logs and pid files in DIR,
-#                wait until the node is idle, and print DIR on stdout. On any
+#                wait until the node is idle, and print DIR on stdout. With
+#                --cpus N the node offers N CPUs whatever it has (Slurm's
+#                config_overrides): the farm test's 4 band jobs, short and
+#                waiting more than computing, then start at once. On any
 #                failure the daemons started are stopped, DIR is removed and
 #                the daemons' logs are shown.
 #   stop DIR     cancel the cluster's jobs, stop its daemons (and any job step
@@ -20,7 +23,7 @@
 set -euo pipefail
 prog=${0##*/}
 die() { echo "$prog: $*" >&2; exit 1; }
-usage() { echo "usage: $prog start [DIR] | stop DIR | env DIR" >&2; exit 64; }
+usage() { echo "usage: $prog start [--cpus N] [DIR] | stop DIR | env DIR" >&2; exit 64; }
 
 for c in munged mungekey slurmctld slurmd sinfo scancel squeue; do
   command -v "$c" >/dev/null || die "$c not found: run scripts/setup.sh (make setup)"
@@ -83,6 +86,13 @@ print(*[s.getsockname()[1] for s in ss])'
 }
 
 start() {
+  local cpus= overrides=
+  if [ "${1:-}" = --cpus ]; then
+    [[ ${2:-} =~ ^[1-9][0-9]*$ ]] || die "--cpus ${2:-}: expected a positive whole number"
+    cpus=$2 overrides=1
+    shift 2
+  fi
+  [ $# -le 1 ] || usage
   local dir=${1:-}
   if [ -z "$dir" ]; then dir=$(mktemp -d "${TMPDIR:-/tmp}/sis-slurm.XXXXXX")
   else mkdir -m 700 -- "$dir" || die "cannot make $dir (it must not exist)"; fi
@@ -91,9 +101,9 @@ start() {
   trap 'exit 130' INT
   trap 'exit 143' TERM
   [ "$(id -u)" -eq 0 ] || die "must run as root (munged, slurmctld and slurmd run as root here)"
-  local host cpus ports ctld_port slurmd_port
+  local host ports ctld_port slurmd_port
   host=$(hostname -s)
-  cpus=$(nproc)
+  cpus=${cpus:-$(nproc)}
   ports=$(free_ports)
   read -r ctld_port slurmd_port <<<"$ports"
   mkdir -p "$dir/munge" "$dir/state" "$dir/spool"
@@ -128,7 +138,8 @@ SchedulerParameters=batch_sched_delay=0
 MinJobAge=5
 DependencyParameters=kill_invalid_depend
 ReturnToService=2
-AccountingStorageType=accounting_storage/none
+${overrides:+SlurmdParameters=config_overrides
+}AccountingStorageType=accounting_storage/none
 JobCompType=jobcomp/none
 MpiDefault=none
 NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus State=UNKNOWN
@@ -160,7 +171,7 @@ show_logs() {
 }
 
 case ${1:-} in
-  start) [ $# -le 2 ] || usage; start "${2:-}" ;;
+  start) shift; start "$@" ;;
   stop) [ $# -eq 2 ] || usage; stop "$2" ;;
   env) [ $# -eq 2 ] || usage; [ -f "$2/slurm.conf" ] || die "$2 is not a cluster folder (no slurm.conf)"
        echo "export SLURM_CONF=$(cd "$2" && pwd -P)/slurm.conf" ;;
