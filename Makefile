@@ -382,7 +382,7 @@ render: $(call render_of,$(SCENE))
 # default binaries up to date; images depend on them).
 ifeq ($(FARM),slurm-submit)
 scene: $(if $(PREBUILT),,build) $(call farm_outputs_of,$(SCENE))
-	@echo "farm: once the merge job has ended, make FARM=slurm with the same variables checks nothing is missing and writes the summary"
+	@echo "farm: once the merge job has ended, make FARM=slurm with the same variables writes the summary from its images"
 else
 scene: $(if $(PREBUILT),,build) $(call summary_of,$(SCENE)) $(call dir_of,$(SCENE))/index.html
 	@echo
