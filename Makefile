@@ -46,6 +46,16 @@
 #                    they render in parallel, and a make-driven farm can send
 #                    them to other machines; siproject projects the bands as one
 #                    image, equal to the single render's result
+#   FARM=local       where TILES bands run: local (this machine, make -j),
+#                    slurm (an sbatch job array of band jobs, each rendering
+#                    its rows and writing their partials, and a dependent
+#                    merge job forming the images; make waits and checks
+#                    them) or slurm-submit (submit both, print the job ids,
+#                    return); logs in $(OUT)/farm/SCENE-RES-fFACTOR-tilesK/logs/
+#   SLURM_ARGS=      extra sbatch options for every job (--partition=P
+#                    --account=A --time=1:00:00)
+#   FARM_CPUS=1      cores per task: sbatch --cpus-per-task, POV-Ray +WT,
+#                    siproject --threads
 #   OUT=out  BUILD=build  JOBS=$(nproc)
 #   SIPROJECT=, SIMETRICS=  use these binaries as they are (no setup or build)
 #
@@ -76,6 +86,9 @@ POVOPTS ?=
 ZP_NYQUIST ?= 0.7
 SCENEDIR ?= scenes
 TILES ?= 1
+FARM ?= local
+SLURM_ARGS ?=
+FARM_CPUS ?= 1
 SAMPLES ?= regular
 SEED ?= 0
 MESH_RAYS ?= 2000000
@@ -177,6 +190,17 @@ endif
 ifneq ($(shell echo '$(MESH_RAYS)' | grep -Ex '[1-9][0-9]*'),$(MESH_RAYS))
 $(error MESH_RAYS=$(MESH_RAYS): expected a positive whole number)
 endif
+ifeq ($(filter $(FARM),local slurm slurm-submit),)
+$(error FARM=$(FARM): expected local, slurm or slurm-submit)
+endif
+ifneq ($(shell echo '$(FARM_CPUS)' | grep -Ex '[1-9][0-9]*'),$(FARM_CPUS))
+$(error FARM_CPUS=$(FARM_CPUS): expected a positive whole number)
+endif
+ifneq ($(FARM),local)
+ifneq ($(SAMPLES),regular)
+$(error FARM=$(FARM) renders regular samples only: SAMPLES=$(SAMPLES) renders in mesh bands on this machine)
+endif
+endif
 RES_TAG := $(if $(filter $(RES_W),$(RES_H)),$(RES_W),$(RES_W)x$(RES_H))
 RENDER_W := $(shell awk 'BEGIN { printf "%d", $(RES_W) * $(FACTOR) + 0.5 }')
 RENDER_H := $(shell awk 'BEGIN { printf "%d", $(RES_H) * $(FACTOR) + 0.5 }')
@@ -226,16 +250,12 @@ inputs_of = $(if $(filter 1,$(TILES))$(SAMPLES_TAG),$(call render_of,$(1)),$(for
 method_cmd_of = $(strip $(SIPROJECT) $(call inputs_of,$(1)) $(if $(filter 1,$(TILES))$(SAMPLES_TAG),,--bands) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(SIFLAGS))
 summary_of = $(call dir_of,$(1))/summary.txt
 
-# $(call band_rules,SCENE,I,Y0,Y1): band I, render rows [Y0, Y1): POV-Ray
-# renders the full frame with only those rows traced (+SR/+ER count rows
-# from 1; 3.7 writes the rest black), oiiotool crops it to its data window.
+# $(call band_rules,SCENE,I,Y0,Y1): band I, render rows [Y0, Y1)
+# (scripts/render_band.sh: POV-Ray's +SR/+ER, cropped by oiiotool).
 define band_rules
 $(call band_of,$(1),$(2)): $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) | $(if $(PREBUILT),,setup)
 	@printf 'render   %-10s band %s of %s: rows %s to %s of %s x %s\n' $(1) $(2) $(TILES) $(3) $$$$(( $(4) - 1 )) $(RENDER_W) $(RENDER_H)
-	@t=$$(basename $$@).tmp; \
-	bash scripts/render.sh $$< $$$$t-frame.exr $(RENDER_W) $(RENDER_H) $(call render_opts_of,$(1)) +SR$$$$(( $(3) + 1 )) +ER$(4) && \
-	oiiotool $$$$t-frame.exr --crop $(RENDER_W)x$$$$(( $(4) - $(3) ))+0+$(3) -d half -o $$$$t.exr && \
-	rm -f $$$$t-frame.exr && mv -f $$$$t.exr $$@ || { rc=$$$$?; rm -f $$$$t-frame.exr $$$$t.exr; exit $$$$rc; }
+	@bash scripts/render_band.sh $$< $$@ $(RENDER_W) $(RENDER_H) $(3) $(4) $(call render_opts_of,$(1))
 endef
 
 # Mesh bands (SAMPLES not regular): band I of MESH_BANDS holds the pattern's
@@ -307,7 +327,52 @@ endef
 
 $(foreach s,$(ALL_SCENES),$(foreach i,$(band_indices),$(eval $(call band_rules,$(s),$(i),$(call band_y0,$(i)),$(call band_y0,$(i) + 1)))))
 $(if $(SAMPLES_TAG),$(foreach s,$(ALL_SCENES),$(foreach i,$(mesh_indices),$(eval $(call mesh_rules,$(s),$(i),$(shell echo $$(( $(i) * $(MESH_ROWS) ))),$(call mesh_y1,$(i)))))))
+# FARM=slurm, slurm-submit: the bands render on a Slurm cluster
+# (scripts/farm/slurm.sh; docs/pipeline.md "On a Slurm cluster"). Band job I
+# renders rows [Y_I, Y_I+1) on its node and writes each method's partial of
+# them (siproject --partial: the method's options but --display, SIFLAGS)
+# to $(OUT)/farm/SCENE-RES-fFACTOR-tilesK/METHOD-bandIofK.exr; the merge job
+# (siproject --merge with the method's --display) writes METHOD.exr, .png and
+# .log as the local rules do. The cuts are whole engine bands, so the images
+# are the single render's bits.
+ifneq ($(FARM),local)
+ifneq ($(filter all scene all-scenes,$(or $(MAKECMDGOALS),all)),)
+ifeq ($(shell [ $(engine_bands) -ge $(TILES) ] && echo ok),)
+$(error FARM=$(FARM) TILES=$(TILES): the render's $(RENDER_H) rows make $(engine_bands) bands of $(BAND_ROWS), fewer than TILES; each band job needs whole bands (TILES at most $(engine_bands), or a larger RES or FACTOR))
+endif
+endif
+endif
+farm_name_of = $(1)-$(RES_TAG)-f$(FACTOR)
+farm_dir_of = $(OUT)/farm/$(call farm_name_of,$(1))-tiles$(TILES)
+display_eq_of = $(subst --display ,--display=,$(METHOD_OPTS_$(1)))
+partial_opts_of = --size $(RES_W)x$(RES_H) $(filter-out --display=%,$(call display_eq_of,$(1))) $(SIFLAGS)
+display_opts_of = $(filter --display=%,$(call display_eq_of,$(1)))
+farm_outputs_of = $(foreach m,$(METHODS),$(call dir_of,$(1))/$(m).exr $(call dir_of,$(1))/$(m).png $(call dir_of,$(1))/$(m).log)
+band_cuts = $(foreach i,$(band_indices) $(TILES),$(call band_y0,$(i)))
+
+# $(call farm_rules,SCENE)
+define farm_rules
+$(foreach m,$(METHODS),$(call dir_of,$(1))/.$(m).cmd): FORCE
+	$$(call stamp,$$@,farm $(TILES) | $$(call partial_opts_of,$$(patsubst .%.cmd,%,$$(notdir $$@))) | $$(call display_opts_of,$$(patsubst .%.cmd,%,$$(notdir $$@))))
+
+$(call farm_outputs_of,$(1)) &: $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) $(SIPROJECT) $(foreach m,$(METHODS),$(call dir_of,$(1))/.$(m).cmd) \
+  scripts/render.sh scripts/render_band.sh scripts/farm/band.sh scripts/farm/merge.sh scripts/farm/slurm.sh | $(if $(PREBUILT),,setup)
+	@printf 'farm     %-10s %s bands of %s x %s on Slurm\n' $(1) $(TILES) $(RENDER_W) $(RENDER_H)
+	@bash scripts/farm/slurm.sh --name $(call farm_name_of,$(1)) --tiles $(TILES) --methods '$(METHODS)' \
+	  --partials $(call farm_dir_of,$(1)) --logs $(call farm_dir_of,$(1))/logs --outputs '$(call farm_outputs_of,$(1))' \
+	  --cpus $(FARM_CPUS) --slurm-args '$(SLURM_ARGS)' $(if $(filter slurm-submit,$(FARM)),--submit-only) \
+	  --scene $(SCENEDIR)/$(1).pov --render $(RENDER_W)x$(RENDER_H) --cuts '$(band_cuts)' \
+	  --partials $(call farm_dir_of,$(1)) --siproject $(SIPROJECT) --povopts '$(call render_opts_of,$(1))' \
+	  $(foreach m,$(METHODS),'$(m)=$(call partial_opts_of,$(m))') \
+	  --merge --partials $(call farm_dir_of,$(1)) --tiles $(TILES) --out $(call dir_of,$(1)) --siproject $(SIPROJECT) \
+	  $(foreach m,$(METHODS),'$(m)=$(call display_opts_of,$(m))')
+endef
+
+ifeq ($(FARM),local)
 $(foreach s,$(ALL_SCENES),$(eval $(call scene_rules,$(s)))$(foreach m,$(METHODS),$(eval $(call method_rules,$(s),$(m)))))
+else
+$(foreach s,$(ALL_SCENES),$(eval $(call scene_rules,$(s)))$(eval $(call farm_rules,$(s))))
+endif
 
 # The render alone, as a make target: make render SCENE=... SAMPLES=...
 .PHONY: render
@@ -315,10 +380,15 @@ render: $(call render_of,$(SCENE))
 
 # Without SIPROJECT given, set up and build first (the build brings the
 # default binaries up to date; images depend on them).
+ifeq ($(FARM),slurm-submit)
+scene: $(if $(PREBUILT),,build) $(call farm_outputs_of,$(SCENE))
+	@echo "farm: once the merge job has ended, make FARM=slurm with the same variables writes the summary from its images"
+else
 scene: $(if $(PREBUILT),,build) $(call summary_of,$(SCENE)) $(call dir_of,$(SCENE))/index.html
 	@echo
 	@cat $(call summary_of,$(SCENE))
 	@echo "The images side by side: $(call dir_of,$(SCENE))/index.html"
+endif
 
 all-scenes: $(if $(PREBUILT),,build) $(foreach s,$(ALL_SCENES),$(call summary_of,$(s)) $(call dir_of,$(s))/index.html)
 	@for f in $(filter %/summary.txt,$^); do echo; cat "$$f"; done

@@ -12,6 +12,7 @@ packages=(
   python3 python3-venv python3-pip python3-dev
   chromium
   time
+  slurmctld slurmd slurm-client munge
 )
 
 here=$(cd "$(dirname "$0")" && pwd)
