@@ -79,6 +79,7 @@ TILES ?= 1
 SAMPLES ?= regular
 SEED ?= 0
 MESH_RAYS ?= 2000000
+RENDER_REPEATS ?= 1
 
 # siproject options of each method. Every choice is spelled out: siproject's
 # default display for min-error is 2x2, so the plain min-error methods say
@@ -207,6 +208,7 @@ endef
 SAMPLES_TAG := $(if $(filter regular,$(SAMPLES)),,-$(SAMPLES)-s$(SEED))
 dir_of = $(OUT)/$(1)$(SAMPLES_TAG)
 render_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).exr
+stats_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).stats
 render_stamp_of = $(OUT)/render/.$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).cmd
 render_opts_of = $(strip $(POVOPTS_$(1)) $(POVOPTS))
 # Row bands: band I of TILES starts at the row `siproject --band-cuts H,TILES`
@@ -249,17 +251,23 @@ MESH_ROWS := $(shell echo $$(( $(MESH_RAYS) / $(RENDER_W) > 0 ? $(MESH_RAYS) / $
 MESH_BANDS := $(shell echo $$(( ( $(RENDER_H) + $(MESH_ROWS) - 1 ) / $(MESH_ROWS) )))
 mesh_indices := $(shell seq 0 $$(( $(MESH_BANDS) - 1 )))
 mesh_band_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG)-mesh$(2)of$(MESH_BANDS).exr
+mesh_stats_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG)-mesh$(2)of$(MESH_BANDS).stats
 mesh_y1 = $(shell echo $$(( ( $(1) + 1 ) * $(MESH_ROWS) < $(RENDER_H) ? ( $(1) + 1 ) * $(MESH_ROWS) : $(RENDER_H) )))
 PATTERN_OPTS := --pattern $(SAMPLES) --seed $(SEED) --size $(RES_W)x$(RES_H) --factor $(FACTOR)
 
 # $(call mesh_rules,SCENE,I,Y0,Y1)
 define mesh_rules
-$(call mesh_band_of,$(1),$(2)): $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) $(SIRAYS) | $(if $(PREBUILT),,setup)
+$(call mesh_band_of,$(1),$(2)) $(call mesh_stats_of,$(1),$(2)) &: $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) $(SIRAYS) | $(if $(PREBUILT),,setup)
 	@printf 'render   %-10s %s rays, band %s of %s: rows %s to %s of %s x %s\n' $(1) $(SAMPLES) $(2) $(MESH_BANDS) $(3) $$$$(( $(4) - 1 )) $(RENDER_W) $(RENDER_H)
-	@t=$$(dir $$@).$$(notdir $$@).tmp; \
+	@b=$(call mesh_band_of,$(1),$(2)); t=$$$$(dirname $$$$b)/.$$$$(basename $$$$b).tmp; \
+	t0=$$$$(date +%s.%N) && \
 	$(SIRAYS) mesh $$< -o $$$$t.pov $(PATTERN_OPTS) --rows $(3):$(4) && \
-	RENDER_MESH_CAMERA=1 bash scripts/render.sh $$$$t.pov $$$$t.exr $(RENDER_W) $$$$(( $(4) - $(3) $(if $(POVRAY_ROW_BUG),+ 1) )) $(call render_opts_of,$(1)) && \
-	rm -f $$$$t.pov && mv -f $$$$t.exr $$@ || { rc=$$$$?; rm -f $$$$t.pov $$$$t.exr; exit $$$$rc; }
+	t1=$$$$(date +%s.%N) && bytes=$$$$(stat -c %s $$$$t.pov) && \
+	RENDER_STATS=$$$$t.stats RENDER_MESH_CAMERA=1 bash scripts/render.sh $$$$t.pov $$$$t.exr $(RENDER_W) $$$$(( $(4) - $(3) $(if $(POVRAY_ROW_BUG),+ 1) )) $(call render_opts_of,$(1)) && \
+	awk -v a=$$$$t0 -v b=$$$$t1 -v n=$$$$bytes -v r=$$$$(( $(RENDER_W) * ( $(4) - $(3) ) )) \
+	  'BEGIN { printf "rays %d\nmesh_s %.3f\nmesh_bytes %d\n", r, b - a, n }' >> $$$$t.stats && \
+	rm -f $$$$t.pov && mv -f $$$$t.stats $(call mesh_stats_of,$(1),$(2)) && mv -f $$$$t.exr $$$$b || \
+	{ rc=$$$$?; rm -f $$$$t.pov $$$$t.exr $$$$t.stats; exit $$$$rc; }
 endef
 
 # $(call scene_rules,SCENE)
@@ -268,13 +276,20 @@ $(call render_stamp_of,$(1)): FORCE
 	$$(call stamp,$$@,$(RENDER_W) $(RENDER_H) $(call render_opts_of,$(1)))
 
 ifeq ($(SAMPLES_TAG),)
-$(call render_of,$(1)): $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) | $(if $(PREBUILT),,setup)
-	@printf 'render   %-10s %s x %s (%s x %s, factor %s) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(RES_W) $(RES_H) $(FACTOR) $$@
-	@bash scripts/render.sh $$< $$@ $(RENDER_W) $(RENDER_H) $(call render_opts_of,$(1))
+$(call render_of,$(1)) $(call stats_of,$(1)) &: $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) | $(if $(PREBUILT),,setup)
+	@printf 'render   %-10s %s x %s (%s x %s, factor %s) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(RES_W) $(RES_H) $(FACTOR) $(call render_of,$(1))
+	@RENDER_STATS=$(call stats_of,$(1)) RENDER_REPEATS=$(RENDER_REPEATS) \
+	  bash scripts/render.sh $$< $(call render_of,$(1)) $(RENDER_W) $(RENDER_H) $(call render_opts_of,$(1))
 else
-$(call render_of,$(1)): $(foreach i,$(mesh_indices),$(call mesh_band_of,$(1),$(i))) $(SIRAYS)
-	@printf 'assemble %-10s %s x %s %s rays (seed %s, %s bands) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(SAMPLES) $(SEED) $(MESH_BANDS) $$@
-	@$(SIRAYS) assemble $(foreach i,$(mesh_indices),$(call mesh_band_of,$(1),$(i))) -o $$@ $(PATTERN_OPTS) $(if $(POVRAY_ROW_BUG),--row-bug)
+# The render's statistics: the sums over its bands.
+$(call render_of,$(1)) $(call stats_of,$(1)) &: $(foreach i,$(mesh_indices),$(call mesh_band_of,$(1),$(i))) $(SIRAYS)
+	@printf 'assemble %-10s %s x %s %s rays (seed %s, %s bands) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(SAMPLES) $(SEED) $(MESH_BANDS) $(call render_of,$(1))
+	@t=$(dir $(call stats_of,$(1))).$(notdir $(call stats_of,$(1))).tmp; \
+	awk '$$$$1 != "wall_runs" { sum[$$$$1] += $$$$2; if (!($$$$1 in seen)) { seen[$$$$1] = 1; order[++n] = $$$$1 } } \
+	  END { for (i = 1; i <= n; i++) print order[i], sum[order[i]]; print "bands", $(MESH_BANDS) }' \
+	  $(foreach i,$(mesh_indices),$(call mesh_stats_of,$(1),$(i))) > $$$$t && \
+	$(SIRAYS) assemble $(foreach i,$(mesh_indices),$(call mesh_band_of,$(1),$(i))) -o $(call render_of,$(1)) $(PATTERN_OPTS) $(if $(POVRAY_ROW_BUG),--row-bug) && \
+	mv -f $$$$t $(call stats_of,$(1)) || { rc=$$$$?; rm -f $$$$t; exit $$$$rc; }
 endif
 
 $(call dir_of,$(1))/.summary.cmd: FORCE
