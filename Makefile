@@ -47,10 +47,18 @@
 #                    them to other machines; siproject projects the bands as one
 #                    image, equal to the single render's result
 #   OUT=out  BUILD=build  JOBS=$(nproc)
+#   RENDER_REPEATS=1 a render under 3 s is timed up to this many times (the
+#                    smallest wall time kept in its .stats; not an option of
+#                    the render: changing it remakes nothing)
 #   SIPROJECT=, SIMETRICS=  use these binaries as they are (no setup or build)
 #
 # Files:
 #   $(OUT)/render/SCENE-RES-fFACTOR.exr   POV-Ray's render (half float, linear)
+#   $(OUT)/render/SCENE-RES-fFACTOR.stats its statistics, lines NAME VALUE
+#                    (scripts/render.sh): wall_s, wall_runs, parse_s, trace_s,
+#                    pixels, samples; of a pattern's render the sums over its
+#                    mesh bands (each band's own beside it) with rays, mesh_s
+#                    (sirays mesh's wall time), mesh_bytes and bands
 #   $(OUT)/render/SCENE-RES-fFACTOR-bandIofK.exr   its row bands (TILES=K)
 #   $(OUT)/SCENE/METHOD.exr, .png, .log   float result, 8-bit sRGB image,
 #                                         siproject -v output (stage times)
@@ -61,6 +69,10 @@
 # A render is redone when its scene, povray.ini, size, factor or POV-Ray
 # options change; an image when its render, siproject or its options change.
 # Hidden stamp files (.NAME.cmd) hold the options each file was made with.
+# The studies (compare, compare-hex, compare-samples, stability, bench) get
+# their renders from this rule alone: each runs make render OUT=its folder
+# SCENE=... RES=... FACTOR=... [POVOPTS=... SAMPLES=...] with the binaries
+# given (scripts/renders.py), and reads the render's times from its .stats.
 BUILD ?= build
 JOBS  ?= $(shell nproc)
 OUT   ?= out
@@ -343,7 +355,8 @@ endif
 FORCE:
 
 # ---- stability: where the methods fail (scripts/stability.py) -----------------
-# make stability [QUICK=1]: out/report/stability/index.html, charts, JSON, CSV.
+# make stability [QUICK=1]: out/report/stability/index.html, charts, JSON, CSV;
+# renders: make render targets in $(OUT)/stability-render/{quick,full}.
 .PHONY: stability
 stability: $(if $(PREBUILT),,build)
 	@$(PYTHON) scripts/stability.py --build $(BUILD) --out $(OUT)/report/stability $(if $(QUICK),--quick)
@@ -355,8 +368,10 @@ stability: $(if $(PREBUILT),,build)
 # shares, overshoot; charts, tables, images. Report: $(OUT)/report/index.html,
 # results.json, *.csv, README-results.md, compare/ (charts and images);
 # QUICK=1: small sizes, three scenes, $(OUT)/report-quick/, a minute or two.
-# Renders, images and measures are kept in $(OUT)/compare (QUICK:
-# $(OUT)/compare-quick) and remade only when what they were made from changes.
+# Renders are make render targets in $(OUT)/compare (QUICK:
+# $(OUT)/compare-quick; POV-Ray's antialiasing in its pov-aa/NAME/), timed
+# COMPARE_REPEATS times when under 3 s (RENDER_REPEATS); images and measures
+# are kept beside them and remade only when what they were made from changes.
 # COMPARE_* variables override the sizes: COMPARE_SCENES, COMPARE_RES,
 # COMPARE_FACTORS, COMPARE_REF_FACTOR, COMPARE_AA, COMPARE_BORDER,
 # COMPARE_REPEATS (timing runs, smallest kept).
@@ -395,7 +410,8 @@ compare: $(if $(PREBUILT),,build)
 # (scripts/compare_hex.py): the smooth analytic image, the zone plate (whole
 # frame and inscribed disk), objects and edges; hex hat and quartic at several
 # densities against the tent and cubic at one coefficient per pixel, factors
-# 2, 4 and 8; the density where they meet. $(OUT)/report/hex/ (QUICK:
+# 2, 4 and 8; the density where they meet; renders: make render targets in
+# $(OUT)/compare-hex[-quick]. $(OUT)/report/hex/ (QUICK:
 # $(OUT)/report-quick/hex/, 64 x 64, factors 2 and 4, about 15 s).
 .PHONY: compare-hex
 compare-hex: $(if $(PREBUILT),,build)
@@ -444,7 +460,9 @@ compare-samples: $(if $(PREBUILT),,build)
 
 # ---- bench: siproject against oiiotool, splineops and the decode floor ---------
 # make bench [QUICK=1]: out/bench/bench.md and bench.csv (scripts/bench.py);
-# the input renders (objects at 8000^2, checker at 16000^2) are made once;
+# the input renders (objects at 8000^2, checker at 16000^2, and objects at
+# 500^2 output pixels, factor 4, regular and jitter: the scattered rows) are
+# make render targets in $(OUT)/bench/render, made once;
 # make docs copies the table into docs/performance.md. BENCHFLAGS: more
 # options (--runs 5, --wait-idle 30, --no-big; scripts/bench.py --help).
 BENCHFLAGS ?=

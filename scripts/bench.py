@@ -377,6 +377,7 @@ def build_rows(competitors, big):
         same_input = c.get("group") not in ("big", "scattered")
         rows.append({
             "group": c["group"],
+            "kind": c.get("kind"),
             "competitor": c["name"],
             "input": c["input"],
             "runs": len(c["walls"]),
