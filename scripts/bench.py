@@ -6,8 +6,9 @@
              [--wait-idle S]
 
 Input: a supersampled POV-Ray render, RENDER_SIZE x RENDER_SIZE half EXR
-(scripts/render.sh, antialiasing off), made once as OUTDIR/SCENE-SIZE.exr and
-reused while it is newer than its scene. The default scene is objects: mostly
+(antialiasing off), a make render target (scripts/renders.py: make render
+OUT=OUTDIR RES=RENDER_SIZE FACTOR=1, OUTDIR/render/SCENE-SIZE-f1.exr), made
+once and remade under the Makefile's one staleness rule. The default scene is objects: mostly
 smooth shading that compresses like a real render (checker compresses to under
 1 MB and makes decoding unrealistically cheap).
 
@@ -37,6 +38,15 @@ the table reports the median wall time and the largest peak resident set:
 plus one run of siproject min-error cubic 2x2 (and the decode floor) on a
 BIG_SIZE^2 render of BIG_SCENE (peak memory at scale), and the acquisition
 microbenchmark (build/tests/microbench BM_Acquisition) at 1 and 2 threads.
+
+Scattered rays (unless --no-scatter): siproject min-error cubic 2x2 on a
+render of SCENE's rays at a pattern's positions (make render
+SAMPLES=SCATTER_PATTERN RES=SCATTER_RES FACTOR=SCATTER_FACTOR; 500 and 4 by
+default: 2000^2 = 4 M rays, two mesh bands of 2 M, about 15 s of POV-Ray
+parse at 3.7 s per million rays, made once; quick: 125 and 4) against the
+regular render of the same size, RUNS rounds alternated, per sample; and,
+from the render's statistics (written when make made it), each mesh band's
+sirays mesh time against POV-Ray's parse of it.
 
 Writes OUTDIR/bench.md (table, command, machine, load average, input, checks
 of the targets) and OUTDIR/bench.csv (--quick: bench-quick.md and .csv), each
@@ -433,7 +443,7 @@ def md_text(rows, meta, threads, micro):
                  f"cannot show (a second thread only helps when a core is free). Re-run on an "
                  f"idle machine for the thread targets.")
     L.append(f"- input: `{meta['input']}` ({meta['input_info']}), scene {meta['scene']}, "
-             f"rendered by scripts/render.sh (POV-Ray, antialiasing off)")
+             f"rendered by `make render` (POV-Ray, antialiasing off)")
     L.append(f"- output: {meta['out_size']}; every competitor is a whole process "
              f"(read, resize, write a 1-part zip EXR of the input's sample type: half, as "
              f"oiiotool keeps it), timed by wall clock; the decode floor reads the samples as "
