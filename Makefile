@@ -57,10 +57,18 @@
 #   FARM_CPUS=1      cores per task: sbatch --cpus-per-task, POV-Ray +WT,
 #                    siproject --threads
 #   OUT=out  BUILD=build  JOBS=$(nproc)
+#   RENDER_REPEATS=1 a render under 3 s is timed up to this many times (the
+#                    smallest wall time kept in its .stats; not an option of
+#                    the render: changing it remakes nothing)
 #   SIPROJECT=, SIMETRICS=  use these binaries as they are (no setup or build)
 #
 # Files:
 #   $(OUT)/render/SCENE-RES-fFACTOR.exr   POV-Ray's render (half float, linear)
+#   $(OUT)/render/SCENE-RES-fFACTOR.stats its statistics, lines NAME VALUE
+#                    (scripts/render.sh): wall_s, wall_runs, parse_s, trace_s,
+#                    pixels, samples; of a pattern's render the sums over its
+#                    mesh bands (each band's own beside it) with rays, mesh_s
+#                    (sirays mesh's wall time), mesh_bytes and bands
 #   $(OUT)/render/SCENE-RES-fFACTOR-bandIofK.exr   its row bands (TILES=K)
 #   $(OUT)/SCENE/METHOD.exr, .png, .log   float result, 8-bit sRGB image,
 #                                         siproject -v output (stage times)
@@ -71,6 +79,10 @@
 # A render is redone when its scene, povray.ini, size, factor or POV-Ray
 # options change; an image when its render, siproject or its options change.
 # Hidden stamp files (.NAME.cmd) hold the options each file was made with.
+# The studies (compare, compare-hex, compare-samples, stability, bench) get
+# their renders from this rule alone: each runs make render OUT=its folder
+# SCENE=... RES=... FACTOR=... [POVOPTS=... SAMPLES=...] with the binaries
+# given (scripts/renders.py), and reads the render's times from its .stats.
 BUILD ?= build
 JOBS  ?= $(shell nproc)
 OUT   ?= out
@@ -92,6 +104,7 @@ FARM_CPUS ?= 1
 SAMPLES ?= regular
 SEED ?= 0
 MESH_RAYS ?= 2000000
+RENDER_REPEATS ?= 1
 
 # siproject options of each method. Every choice is spelled out: siproject's
 # default display for min-error is 2x2, so the plain min-error methods say
@@ -231,6 +244,7 @@ endef
 SAMPLES_TAG := $(if $(filter regular,$(SAMPLES)),,-$(SAMPLES)-s$(SEED))
 dir_of = $(OUT)/$(1)$(SAMPLES_TAG)
 render_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).exr
+stats_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).stats
 render_stamp_of = $(OUT)/render/.$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).cmd
 render_opts_of = $(strip $(POVOPTS_$(1)) $(POVOPTS))
 # Row bands: band I of TILES starts at the row `siproject --band-cuts H,TILES`
@@ -269,17 +283,23 @@ MESH_ROWS := $(shell echo $$(( $(MESH_RAYS) / $(RENDER_W) > 0 ? $(MESH_RAYS) / $
 MESH_BANDS := $(shell echo $$(( ( $(RENDER_H) + $(MESH_ROWS) - 1 ) / $(MESH_ROWS) )))
 mesh_indices := $(shell seq 0 $$(( $(MESH_BANDS) - 1 )))
 mesh_band_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG)-mesh$(2)of$(MESH_BANDS).exr
+mesh_stats_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG)-mesh$(2)of$(MESH_BANDS).stats
 mesh_y1 = $(shell echo $$(( ( $(1) + 1 ) * $(MESH_ROWS) < $(RENDER_H) ? ( $(1) + 1 ) * $(MESH_ROWS) : $(RENDER_H) )))
 PATTERN_OPTS := --pattern $(SAMPLES) --seed $(SEED) --size $(RES_W)x$(RES_H) --factor $(FACTOR)
 
 # $(call mesh_rules,SCENE,I,Y0,Y1)
 define mesh_rules
-$(call mesh_band_of,$(1),$(2)): $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) $(SIRAYS) | $(if $(PREBUILT),,setup)
+$(call mesh_band_of,$(1),$(2)) $(call mesh_stats_of,$(1),$(2)) &: $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) $(SIRAYS) | $(if $(PREBUILT),,setup)
 	@printf 'render   %-10s %s rays, band %s of %s: rows %s to %s of %s x %s\n' $(1) $(SAMPLES) $(2) $(MESH_BANDS) $(3) $$$$(( $(4) - 1 )) $(RENDER_W) $(RENDER_H)
-	@t=$$(dir $$@).$$(notdir $$@).tmp; \
+	@b=$(call mesh_band_of,$(1),$(2)); t=$$$$(dirname $$$$b)/.$$$$(basename $$$$b).tmp; \
+	t0=$$$$(date +%s.%N) && \
 	$(SIRAYS) mesh $$< -o $$$$t.pov $(PATTERN_OPTS) --rows $(3):$(4) && \
-	RENDER_MESH_CAMERA=1 bash scripts/render.sh $$$$t.pov $$$$t.exr $(RENDER_W) $$$$(( $(4) - $(3) $(if $(POVRAY_ROW_BUG),+ 1) )) $(call render_opts_of,$(1)) && \
-	rm -f $$$$t.pov && mv -f $$$$t.exr $$@ || { rc=$$$$?; rm -f $$$$t.pov $$$$t.exr; exit $$$$rc; }
+	t1=$$$$(date +%s.%N) && bytes=$$$$(stat -c %s $$$$t.pov) && \
+	RENDER_STATS=$$$$t.stats RENDER_MESH_CAMERA=1 bash scripts/render.sh $$$$t.pov $$$$t.exr $(RENDER_W) $$$$(( $(4) - $(3) $(if $(POVRAY_ROW_BUG),+ 1) )) $(call render_opts_of,$(1)) && \
+	awk -v a=$$$$t0 -v b=$$$$t1 -v n=$$$$bytes -v r=$$$$(( $(RENDER_W) * ( $(4) - $(3) ) )) \
+	  'BEGIN { printf "rays %d\nmesh_s %.3f\nmesh_bytes %d\n", r, b - a, n }' >> $$$$t.stats && \
+	rm -f $$$$t.pov && mv -f $$$$t.stats $(call mesh_stats_of,$(1),$(2)) && mv -f $$$$t.exr $$$$b || \
+	{ rc=$$$$?; rm -f $$$$t.pov $$$$t.exr $$$$t.stats; exit $$$$rc; }
 endef
 
 # $(call scene_rules,SCENE)
@@ -288,13 +308,20 @@ $(call render_stamp_of,$(1)): FORCE
 	$$(call stamp,$$@,$(RENDER_W) $(RENDER_H) $(call render_opts_of,$(1)))
 
 ifeq ($(SAMPLES_TAG),)
-$(call render_of,$(1)): $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) | $(if $(PREBUILT),,setup)
-	@printf 'render   %-10s %s x %s (%s x %s, factor %s) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(RES_W) $(RES_H) $(FACTOR) $$@
-	@bash scripts/render.sh $$< $$@ $(RENDER_W) $(RENDER_H) $(call render_opts_of,$(1))
+$(call render_of,$(1)) $(call stats_of,$(1)) &: $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) | $(if $(PREBUILT),,setup)
+	@printf 'render   %-10s %s x %s (%s x %s, factor %s) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(RES_W) $(RES_H) $(FACTOR) $(call render_of,$(1))
+	@RENDER_STATS=$(call stats_of,$(1)) RENDER_REPEATS=$(RENDER_REPEATS) \
+	  bash scripts/render.sh $$< $(call render_of,$(1)) $(RENDER_W) $(RENDER_H) $(call render_opts_of,$(1))
 else
-$(call render_of,$(1)): $(foreach i,$(mesh_indices),$(call mesh_band_of,$(1),$(i))) $(SIRAYS)
-	@printf 'assemble %-10s %s x %s %s rays (seed %s, %s bands) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(SAMPLES) $(SEED) $(MESH_BANDS) $$@
-	@$(SIRAYS) assemble $(foreach i,$(mesh_indices),$(call mesh_band_of,$(1),$(i))) -o $$@ $(PATTERN_OPTS) $(if $(POVRAY_ROW_BUG),--row-bug)
+# The render's statistics: the sums over its bands.
+$(call render_of,$(1)) $(call stats_of,$(1)) &: $(foreach i,$(mesh_indices),$(call mesh_band_of,$(1),$(i))) $(SIRAYS)
+	@printf 'assemble %-10s %s x %s %s rays (seed %s, %s bands) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(SAMPLES) $(SEED) $(MESH_BANDS) $(call render_of,$(1))
+	@t=$(dir $(call stats_of,$(1))).$(notdir $(call stats_of,$(1))).tmp; \
+	awk '$$$$1 != "wall_runs" { sum[$$$$1] += $$$$2; if (!($$$$1 in seen)) { seen[$$$$1] = 1; order[++n] = $$$$1 } } \
+	  END { for (i = 1; i <= n; i++) print order[i], sum[order[i]]; print "bands", $(MESH_BANDS) }' \
+	  $(foreach i,$(mesh_indices),$(call mesh_stats_of,$(1),$(i))) > $$$$t && \
+	$(SIRAYS) assemble $(foreach i,$(mesh_indices),$(call mesh_band_of,$(1),$(i))) -o $(call render_of,$(1)) $(PATTERN_OPTS) $(if $(POVRAY_ROW_BUG),--row-bug) && \
+	mv -f $$$$t $(call stats_of,$(1)) || { rc=$$$$?; rm -f $$$$t; exit $$$$rc; }
 endif
 
 $(call dir_of,$(1))/.summary.cmd: FORCE
@@ -398,7 +425,8 @@ endif
 FORCE:
 
 # ---- stability: where the methods fail (scripts/stability.py) -----------------
-# make stability [QUICK=1]: out/report/stability/index.html, charts, JSON, CSV.
+# make stability [QUICK=1]: out/report/stability/index.html, charts, JSON, CSV;
+# renders: make render targets in $(OUT)/stability-render/{quick,full}.
 .PHONY: stability
 stability: $(if $(PREBUILT),,build)
 	@$(PYTHON) scripts/stability.py --build $(BUILD) --out $(OUT)/report/stability $(if $(QUICK),--quick)
@@ -410,8 +438,10 @@ stability: $(if $(PREBUILT),,build)
 # shares, overshoot; charts, tables, images. Report: $(OUT)/report/index.html,
 # results.json, *.csv, README-results.md, compare/ (charts and images);
 # QUICK=1: small sizes, three scenes, $(OUT)/report-quick/, a minute or two.
-# Renders, images and measures are kept in $(OUT)/compare (QUICK:
-# $(OUT)/compare-quick) and remade only when what they were made from changes.
+# Renders are make render targets in $(OUT)/compare (QUICK:
+# $(OUT)/compare-quick; POV-Ray's antialiasing in its pov-aa/NAME/), timed
+# COMPARE_REPEATS times when under 3 s (RENDER_REPEATS); images and measures
+# are kept beside them and remade only when what they were made from changes.
 # COMPARE_* variables override the sizes: COMPARE_SCENES, COMPARE_RES,
 # COMPARE_FACTORS, COMPARE_REF_FACTOR, COMPARE_AA, COMPARE_BORDER,
 # COMPARE_REPEATS (timing runs, smallest kept).
@@ -450,7 +480,8 @@ compare: $(if $(PREBUILT),,build)
 # (scripts/compare_hex.py): the smooth analytic image, the zone plate (whole
 # frame and inscribed disk), objects and edges; hex hat and quartic at several
 # densities against the tent and cubic at one coefficient per pixel, factors
-# 2, 4 and 8; the density where they meet. $(OUT)/report/hex/ (QUICK:
+# 2, 4 and 8; the density where they meet; renders: make render targets in
+# $(OUT)/compare-hex[-quick]. $(OUT)/report/hex/ (QUICK:
 # $(OUT)/report-quick/hex/, 64 x 64, factors 2 and 4, about 15 s).
 .PHONY: compare-hex
 compare-hex: $(if $(PREBUILT),,build)
@@ -499,7 +530,9 @@ compare-samples: $(if $(PREBUILT),,build)
 
 # ---- bench: siproject against oiiotool, splineops and the decode floor ---------
 # make bench [QUICK=1]: out/bench/bench.md and bench.csv (scripts/bench.py);
-# the input renders (objects at 8000^2, checker at 16000^2) are made once;
+# the input renders (objects at 8000^2, checker at 16000^2, and objects at
+# 500^2 output pixels, factor 4, regular and jitter: the scattered rows) are
+# make render targets in $(OUT)/bench/render, made once;
 # make docs copies the table into docs/performance.md. BENCHFLAGS: more
 # options (--runs 5, --wait-idle 30, --no-big; scripts/bench.py --help).
 BENCHFLAGS ?=

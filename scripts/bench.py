@@ -6,8 +6,9 @@
              [--wait-idle S]
 
 Input: a supersampled POV-Ray render, RENDER_SIZE x RENDER_SIZE half EXR
-(scripts/render.sh, antialiasing off), made once as OUTDIR/SCENE-SIZE.exr and
-reused while it is newer than its scene. The default scene is objects: mostly
+(antialiasing off), a make render target (scripts/renders.py: make render
+OUT=OUTDIR RES=RENDER_SIZE FACTOR=1, OUTDIR/render/SCENE-SIZE-f1.exr), made
+once and remade under the Makefile's one staleness rule. The default scene is objects: mostly
 smooth shading that compresses like a real render (checker compresses to under
 1 MB and makes decoding unrealistically cheap).
 
@@ -38,6 +39,15 @@ plus one run of siproject min-error cubic 2x2 (and the decode floor) on a
 BIG_SIZE^2 render of BIG_SCENE (peak memory at scale), and the acquisition
 microbenchmark (build/tests/microbench BM_Acquisition) at 1 and 2 threads.
 
+Scattered rays (unless --no-scatter): siproject min-error cubic 2x2 on a
+render of SCENE's rays at a pattern's positions (make render
+SAMPLES=SCATTER_PATTERN RES=SCATTER_RES FACTOR=SCATTER_FACTOR; 500 and 4 by
+default: 2000^2 = 4 M rays, two mesh bands of 2 M, about 15 s of POV-Ray
+parse at 3.7 s per million rays, made once; quick: 125 and 4) against the
+regular render of the same size, RUNS rounds alternated, per sample; and,
+from the render's statistics (written when make made it), each mesh band's
+sirays mesh time against POV-Ray's parse of it.
+
 Writes OUTDIR/bench.md (table, command, machine, load average, input, checks
 of the targets) and OUTDIR/bench.csv (--quick: bench-quick.md and .csv), each
 to a temporary name renamed at the end: never a partial file. Binaries are copied to a private folder first, so
@@ -64,6 +74,7 @@ import sys
 import tempfile
 import time
 from atomic import write_atomic  # noqa: E402
+from renders import RenderError, make_render, read_stats, stats_path  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -132,6 +143,7 @@ def check_tools(args):
     require_file(args.siproject, "siproject", hint_build)
     require_file(args.sidecode, "sidecode", hint_build)
     require_file(args.microbench, "microbench", hint_build)
+    require_file(os.path.join(args.build, "tools", "sirays"), "sirays", hint_build)
     require_file(args.python, "the project's Python", "run scripts/setup.sh")
     if not os.path.isfile("/usr/bin/time"):
         raise BenchError("/usr/bin/time not found (Debian package time; run scripts/setup.sh)")
@@ -168,31 +180,25 @@ def capture(cmd):
 
 # ---- inputs --------------------------------------------------------------------
 
-def ensure_render(scene, size, outdir):
-    """OUTDIR/SCENE-SIZE.exr, rendered by scripts/render.sh unless it exists and
-    is newer than the scene and scenes/povray.ini."""
+def ensure_render(args, scene, res, factor, samples="regular"):
+    """The render of SCENE at RES^2 output pixels and FACTOR (SAMPLES: the
+    pattern), made by make in OUTDIR (make render OUT=OUTDIR ...: the
+    Makefile's one staleness rule; made once, remade when its scene,
+    povray.ini, size, factor or options change). Returns (path, statistics
+    that scripts/render.sh wrote beside it)."""
     pov = os.path.join(ROOT, "scenes", f"{scene}.pov")
     if not os.path.isfile(pov):
         scenes = sorted(f[:-4] for f in os.listdir(os.path.join(ROOT, "scenes")) if f.endswith(".pov"))
         raise BenchError(f"no scene {rel(pov)}; scenes: {' '.join(scenes)}")
-    out = os.path.join(outdir, f"{scene}-{size}.exr")
-    ini = os.path.join(ROOT, "scenes", "povray.ini")
-    if os.path.isfile(out) and os.path.getmtime(out) >= max(os.path.getmtime(pov), os.path.getmtime(ini)):
-        return out
-    log(f"render {scene} {size} x {size} -> {rel(out)} (once; reused by later runs)")
     t0 = time.perf_counter()
-    # render.sh cleans up (POV-Ray, its temporary file) on SIGTERM, not on SIGKILL.
-    p = subprocess.Popen(["bash", os.path.join(HERE, "render.sh"), pov, out, str(size), str(size)])
     try:
-        rc = p.wait()
-    except BaseException:
-        p.terminate()
-        p.wait()
-        raise
-    if rc != 0:
-        raise BenchError(f"rendering {rel(pov)} at {size} x {size} failed (status {rc})")
-    log(f"rendered in {time.perf_counter() - t0:.0f} s")
-    return out
+        path, stats, made = make_render(args.outdir, scene, res, factor, samples=samples, seed=args.scatter_seed,
+                                        build=args.build)
+    except RenderError as e:
+        raise BenchError(str(e))
+    if made:
+        log(f"rendered {rel(path)} in {time.perf_counter() - t0:.0f} s (once; reused by later runs)")
+    return path, stats
 
 
 def describe_exr(path):
@@ -378,9 +384,10 @@ def build_rows(competitors, big):
     rows = []
     for c in competitors + big:
         wall = statistics.median(c["walls"])
-        same_input = c.get("group") != "big"
+        same_input = c.get("group") not in ("big", "scattered")
         rows.append({
             "group": c["group"],
+            "kind": c.get("kind"),
             "competitor": c["name"],
             "input": c["input"],
             "runs": len(c["walls"]),
@@ -436,7 +443,7 @@ def md_text(rows, meta, threads, micro):
                  f"cannot show (a second thread only helps when a core is free). Re-run on an "
                  f"idle machine for the thread targets.")
     L.append(f"- input: `{meta['input']}` ({meta['input_info']}), scene {meta['scene']}, "
-             f"rendered by scripts/render.sh (POV-Ray, antialiasing off)")
+             f"rendered by `make render` (POV-Ray, antialiasing off)")
     L.append(f"- output: {meta['out_size']}; every competitor is a whole process "
              f"(read, resize, write a 1-part zip EXR of the input's sample type: half, as "
              f"oiiotool keeps it), timed by wall clock; the decode floor reads the samples as "
@@ -456,7 +463,7 @@ def md_text(rows, meta, threads, micro):
     L.append("| competitor | wall (s), median | min-max (s) | / decode floor | / oiiotool bspline | peak memory (MB) | CPU (s), user+sys |")
     L.append("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
     for r in rows:
-        if r["group"] in ("threads", "big"):
+        if r["group"] in ("threads", "big", "scattered"):
             continue
         name = f"**{r['competitor']}**" if r["competitor"] == HEADLINE else r["competitor"]
         L.append(f"| {name} | {r['wall_median_s']:.2f} | {r['wall_min_s']:.2f}-{r['wall_max_s']:.2f} | "
@@ -473,6 +480,7 @@ def md_text(rows, meta, threads, micro):
         for r in big:
             L.append(f"| {r['competitor']} | {r['wall_median_s']:.2f} | {fmt_ratio(r['ratio_decode'])} | "
                      f"{r['peak_rss_mb']:.0f} | {r['cpu_median_s']:.2f} |")
+    L.extend(scatter_text(rows, meta))
     L.append("")
     L.append("## Threads")
     L.append("")
@@ -518,8 +526,64 @@ def md_text(rows, meta, threads, micro):
     return "\n".join(L)
 
 
+def kind_label(args, kind):
+    n = int(args.scatter_res * args.scatter_factor + 0.5)
+    return (f"{n}^2 regular render" if kind == "regular"
+            else f"{n}^2 {args.scatter_pattern} render (seed {args.scatter_seed})")
+
+
+def scatter_rays(args):
+    return int(args.scatter_res * args.scatter_factor + 0.5) ** 2
+
+
+def scatter_text(rows, meta):
+    """The scattered render's rows: siproject on it against the same size's
+    regular render, per sample; its mesh bands' costs against POV-Ray's
+    parse of them."""
+    sc = meta.get("scatter")
+    if not sc:
+        return []
+    by = {r.get("kind"): r for r in rows if r["group"] == "scattered"}
+    reg, sca = by["regular"], by["scattered"]
+    rays = sc["rays"]
+    L = ["", f"Scattered rays: `{sc['scattered']}` ({sc['pattern']} rays, seed {sc['seed']}, {rays / 1e6:.2f} M rays "
+         f"over {sc['res']} x {sc['res']} output pixels, factor {sc['factor']:g}: `make render SCENE={meta['scene']} "
+         f"RES={sc['res']} FACTOR={sc['factor']:g} SAMPLES={sc['pattern']} SEED={sc['seed']}`) against the regular "
+         f"render of the same size `{sc['regular']}`, siproject min-error cubic 2x2 onto {sc['res']} x {sc['res']}, "
+         f"{reg['runs']} round(s) each, alternated:", "",
+         "| input | wall (s), median | min-max (s) | per sample (ns) | peak memory (MB) | CPU (s), user+sys |",
+         "| --- | ---: | ---: | ---: | ---: | ---: |"]
+    for r in (reg, sca):
+        L.append(f"| {r['competitor'].split(', ', 1)[1]} | {r['wall_median_s']:.2f} | "
+                 f"{r['wall_min_s']:.2f}-{r['wall_max_s']:.2f} | {1e9 * r['wall_median_s'] / rays:.0f} | "
+                 f"{r['peak_rss_mb']:.0f} | {r['cpu_median_s']:.2f} |")
+    L.append(f"| scattered / regular | {sca['wall_median_s'] / reg['wall_median_s']:.2f} | | | "
+             f"{sca['peak_rss_mb'] / reg['peak_rss_mb']:.2f} | {sca['cpu_median_s'] / reg['cpu_median_s']:.2f} |")
+    L.append("")
+    L.append(f"Its render, once, when make made it (`make render ... SAMPLES={sc['pattern']}`: each mesh band "
+             f"written by `sirays mesh` and rendered by one POV-Ray process, one band after another; "
+             f"times from the render's statistics, `{sc['scattered'][:-4]}.stats` and its bands'; POV-Ray's parse "
+             f"and trace times as it prints them with +GS; POV-Ray's wall includes its start-up, parse and trace):")
+    L.append("")
+    L.append("| band | rays | mesh (MB) | sirays mesh (s) | POV-Ray parse (s) | mesh / parse | POV-Ray trace (s) | POV-Ray wall (s) |")
+    L.append("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    bands = sc["bands"]
+    for i, b in enumerate(bands):
+        L.append(f"| {i} | {b['rays']} | {b['mesh_bytes'] / 1e6:.0f} | {b['mesh_s']:.2f} | {b['parse_s']:.2f} | "
+                 f"{b['mesh_s'] / b['parse_s']:.2f} | {b['trace_s']:.2f} | {b['wall_s']:.2f} |")
+    t = sc["scattered_stats"]
+    L.append(f"| all {len(bands)} | {t['rays']} | {t['mesh_bytes'] / 1e6:.0f} | {t['mesh_s']:.2f} | "
+             f"{t['parse_s']:.2f} | {t['mesh_s'] / t['parse_s']:.2f} | {t['trace_s']:.2f} | {t['wall_s']:.2f} |")
+    g = sc["regular_stats"]
+    L.append(f"| regular render | {rays} | | | {g['parse_s']:.2f} | | {g['trace_s']:.2f} | {g['wall_s']:.2f} |")
+    L.append("")
+    L.append(f"Per million rays: sirays mesh {1e6 * t['mesh_s'] / t['rays']:.2f} s, POV-Ray's parse "
+             f"{1e6 * t['parse_s'] / t['rays']:.2f} s, mesh text {t['mesh_bytes'] / t['rays']:.0f} bytes per ray.")
+    return L
+
+
 def targets(rows, threads, micro):
-    by = {r["competitor"]: r for r in rows if r["group"] != "big"}
+    by = {r["competitor"]: r for r in rows if r["group"] not in ("big", "scattered")}
     head = by[HEADLINE]
     checks = [
         (head["ratio_oiio_bspline"] <= TARGET_RATIO_OIIO,
@@ -569,6 +633,14 @@ def parse_args():
     ap.add_argument("--big-scene", default="checker", help="scene of the input at scale, for peak memory (default checker)")
     ap.add_argument("--big-size", type=int, default=None, help="its render size; default 16000, quick 2000")
     ap.add_argument("--no-big", action="store_true", help="skip the input at scale")
+    ap.add_argument("--scatter-res", type=int, default=None,
+                    help="the scattered render's output size N (N x N); default 500, quick 125")
+    ap.add_argument("--scatter-factor", type=float, default=4,
+                    help="its factor: (N FACTOR)^2 rays (default 4: 2000^2, 4 M rays)")
+    ap.add_argument("--scatter-pattern", default="jitter", choices=("jitter", "sobol"),
+                    help="its pattern (default jitter)")
+    ap.add_argument("--scatter-seed", type=int, default=0, help="its seed (default 0)")
+    ap.add_argument("--no-scatter", action="store_true", help="skip the scattered render")
     ap.add_argument("--wait-idle", type=float, default=0, metavar="S",
                     help="before each timed run, wait up to S seconds for other work to leave "
                          f"the cores idle (under {IDLE_BELOW} busy); for shared machines")
@@ -585,7 +657,10 @@ def parse_args():
     args.out_size = args.out_size or (250 if q else 1000)
     args.runs = args.runs or (1 if q else 3)
     args.big_size = args.big_size or (2000 if q else 16000)
-    for name in ("render_size", "out_size", "runs", "big_size"):
+    args.scatter_res = args.scatter_res or (125 if q else 500)
+    if not args.scatter_factor > 0 or args.scatter_seed < 0:
+        ap.error("--scatter-factor must be positive and --scatter-seed at least 0")
+    for name in ("render_size", "out_size", "runs", "big_size", "scatter_res"):
         if getattr(args, name) <= 0:
             ap.error(f"--{name.replace('_', '-')} must be positive")
     if args.out_size > args.render_size:
@@ -594,6 +669,7 @@ def parse_args():
     args.sidecode = os.path.abspath(args.sidecode or os.path.join(args.build, "tools", "sidecode"))
     args.microbench = os.path.abspath(args.microbench or os.path.join(args.build, "tests", "microbench"))
     args.outdir = os.path.abspath(args.outdir)
+    args.build = os.path.abspath(args.build)
     return args
 
 
@@ -641,8 +717,17 @@ def main():
         original = {k: getattr(args, k) for k in ("siproject", "sidecode", "microbench")}
         digests = snapshot_binaries(args, tools_dir)
 
-        inp = ensure_render(args.scene, args.render_size, args.outdir)
-        big_inp = None if args.no_big else ensure_render(args.big_scene, args.big_size, args.outdir)
+        inp, _ = ensure_render(args, args.scene, args.render_size, 1)
+        big_inp = None if args.no_big else ensure_render(args, args.big_scene, args.big_size, 1)[0]
+        scatter = None
+        if not args.no_scatter:
+            res, f = args.scatter_res, args.scatter_factor
+            reg, reg_stats = ensure_render(args, args.scene, res, f)
+            sca, sca_stats = ensure_render(args, args.scene, res, f, samples=args.scatter_pattern)
+            bands = [read_stats(f"{sca[:-4]}-mesh{i}of{sca_stats['bands']}.stats")
+                     for i in range(int(sca_stats["bands"]))]
+            scatter = {"regular": reg, "scattered": sca, "regular_stats": reg_stats,
+                       "scattered_stats": sca_stats, "bands": bands}
         info = describe_exr(inp)
         log(f"input {rel(inp)}: {exr_text(info)}")
 
@@ -691,6 +776,24 @@ def main():
             si["floor"] = floor["walls"][0]
             floor["floor"] = floor["walls"][0]
 
+        scat = []
+        if scatter:
+            size = f"{args.scatter_res}x{args.scatter_res}"
+            for kind in ("regular", "scattered"):
+                src = scatter[kind]
+                warm_cache(src)
+                scat.append({"group": "scattered", "kind": kind,
+                             "name": f"{HEADLINE}, {kind_label(args, kind)}",
+                             "cmd": [args.siproject, src, "-o", os.path.join(work, f"scatter-{kind}.exr"),
+                                     "--size", size] + SIPROJECT_METHODS[0][1] + ["-v"]})
+            rays = scatter_rays(args)
+            for c in scat:
+                c["input"] = f"{rays} rays"
+                c["display"] = shown(c["cmd"])
+            log(f"scattered rays: {rel(scatter['scattered'])} against {rel(scatter['regular'])}, "
+                f"{args.runs} round(s)")
+            round_robin(scat, args.runs, work)
+
         reps = 1 if args.quick else max(5, args.runs)  # as many rounds as the table, at least 5
         log(f"microbench BM_Acquisition at 1 and 2 threads ({reps} round(s))")
         samples, mcmd = microbench_acquisition(args.microbench, reps)
@@ -699,7 +802,7 @@ def main():
                  "command": shlex.join([rel(original["microbench"])] + mcmd[1:])}
         load_end = load_average()
 
-        rows = build_rows(comps, big)
+        rows = build_rows(comps, big + scat)
         by = {r["competitor"]: r for r in rows}
         threads = {"identical": identical,
                    "t1": by[t1["name"]], "t2": by[t2["name"]]}
@@ -729,6 +832,11 @@ def main():
                    + (" with uncommitted changes" if capture(["git", "-C", ROOT, "status", "--porcelain",
                                                               "--untracked-files=no"]) else ""),
             "digests": ", ".join(f"{k} {v}" for k, v in digests.items()),
+            "scatter": scatter and {**scatter, "regular": rel(scatter["regular"]),
+                                    "scattered": rel(scatter["scattered"]),
+                                    "pattern": args.scatter_pattern, "seed": args.scatter_seed,
+                                    "res": args.scatter_res, "factor": args.scatter_factor,
+                                    "rays": scatter_rays(args)},
         }
         meta["checks"] = targets(rows, threads, micro)
         md = md_text(rows, meta, threads, micro)

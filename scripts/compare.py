@@ -8,19 +8,23 @@
                [--label full|quick]
 
 For every scene (scenes/SCENE.pov):
-  renders    POV-Ray through scripts/render.sh, antialiasing off, at every
-             FACTOR (RES * FACTOR pixels per axis) and at REF_FACTOR (the
-             reference); wall time of render.sh measured (POV-Ray's start-up
-             and parse included), the smallest of up to REPEATS runs for renders
-             under 3 s, which stop early once two runs agree within 5 %;
+  renders    make's render target (scripts/renders.py: make render OUT=WORK
+             SCENE=... RES=... FACTOR=..., the Makefile's one staleness
+             rule), antialiasing off, at every FACTOR (RES * FACTOR pixels per
+             axis) and at REF_FACTOR (the reference); POV-Ray's wall time
+             (start-up and parse included) and +GS statistics as
+             scripts/render.sh records them beside the render (NAME.stats):
+             the smallest of up to REPEATS runs for renders under 3 s, which
+             stop early once two runs agree within 5 %;
   baseline   POV-Ray's own antialiasing at the final size: +A0.0 (threshold 0,
              so every pixel is supersampled) with +AM1 (n x n grid plus the
              centre ray, n = depth) or +AM2 (recursive corner subdivision,
-             a (2^(R-1)+1)^2 grid per pixel), -J; render.sh forces -A but
-             passes these after it, and POV-Ray takes the last option given;
+             a (2^(R-1)+1)^2 grid per pixel), -J: make render FACTOR=1
+             POVOPTS=... in WORK/pov-aa/AA/; render.sh forces -A but passes
+             these after it, and POV-Ray takes the last option given;
   methods    every method (the Makefile's METHOD_OPTS_*, siproject's options)
              on every render through the Python module siproject, in this
-             process (subprocesses only for POV-Ray): the display EXR, the
+             process (subprocesses only for make's renders): the display EXR, the
              coefficient file (one per distinct approximation: methods that
              differ only in --display share f_app), and the projection's time
              (the render read, projected and resampled), the smallest of
@@ -36,9 +40,9 @@ For every scene (scenes/SCENE.pov):
              generator) or, for the zone plate, its closed form. The
              baseline's f_app is piecewise constant (box).
 
-Every artefact lives in WORK with a JSON sidecar holding what it was made from
-(file digests, options, the module's digest) and its timings; it is remade
-only when that changes, so renders are never redone for nothing. Then scripts/report_compare.py writes the report folder (built in a
+Every other artefact lives in WORK with a JSON sidecar holding what it was
+made from (file digests, options, the module's digest) and its timings; it is
+remade only when that changes. Then scripts/report_compare.py writes the report folder (built in a
 temporary folder and renamed into place). Any failure: a message on stderr,
 exit status 1 (2 for usage), no partial file.
 """
@@ -53,7 +57,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 
 import numpy as np
@@ -64,6 +67,7 @@ except ImportError as e:
     sys.exit(f"compare: the Python module siproject is missing ({e}): run make build, which builds it "
              f"and puts it on .venv's path")
 from atomic import write_atomic  # noqa: E402
+from renders import RenderError, make_render, stats_path  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -214,18 +218,6 @@ def load_average():
         return None
 
 
-def run(cmd, what):
-    """Runs CMD; returns (stdout, stderr); raises CompareError naming WHAT."""
-    try:
-        r = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
-    except OSError as e:
-        raise CompareError(f"{what}: cannot run {cmd[0]}: {e}")
-    if r.returncode != 0:
-        tail = "\n".join((r.stderr or r.stdout).strip().splitlines()[-15:])
-        raise CompareError(f"{what} failed with status {r.returncode}:\n  {shlex.join(cmd)}\n{tail}")
-    return r.stdout, r.stderr
-
-
 TOTAL_RE = re.compile(r"total ([0-9.]+) s")
 
 
@@ -256,22 +248,6 @@ def engine(call, what, *args, **kwargs):
         raise CompareError(f"{what}: {e}")
 
 
-def povray_stats(stderr):
-    """Primary rays and trace time from POV-Ray's +GS statistics."""
-    out = {}
-    m = re.search(r"Pixels:\s+(\d+)\s+Samples:\s+(\d+)", stderr)
-    if m:
-        out["pixels_traced"] = int(m.group(1))
-        out["samples"] = int(m.group(2))
-    m = re.search(r"Trace Time:.*?\(([0-9.]+) seconds\)", stderr)
-    if m:
-        out["trace_s"] = float(m.group(1))
-    m = re.search(r"Parse Time:.*?\(([0-9.]+) seconds\)", stderr)
-    if m:
-        out["parse_s"] = float(m.group(1))
-    return out
-
-
 # ---- configuration -------------------------------------------------------------------
 
 def parse_size(text):
@@ -300,8 +276,6 @@ def parse_args(argv):
     p.add_argument("--show-factor", type=float, default=None,
                    help="factor of the images shown in the report (default: 4, or the nearest)")
     p.add_argument("--repeats", type=int, default=3, help="timing runs (smallest kept)")
-    p.add_argument("--repeat-below", type=float, default=3.0,
-                   help="renders longer than this many seconds are timed once")
     p.add_argument("--zp-nyquist", type=float, default=0.7)
     p.add_argument("--label", default="full", help="names the configuration in the report")
     a = p.parse_args(argv)
@@ -353,7 +327,6 @@ def parse_args(argv):
     if a.repeats < 1:
         raise CompareError("--repeats must be at least 1")
     cfg.repeats = a.repeats
-    cfg.repeat_below = a.repeat_below
     sf = a.show_factor if a.show_factor is not None else 4.0
     cfg.show_factor = min(cfg.factors, key=lambda f: (abs(math.log(f / sf)), -f))
     cfg.zp_nyquist = a.zp_nyquist
@@ -403,9 +376,6 @@ class Pipeline:
         self.cfg = cfg
         self.tools = tools  # {"module_sha": the Python module's digest}
         self.digest = Digests(os.path.join(cfg.work, ".digests.json"))
-        self.render_sh = os.path.join(HERE, "render.sh")
-        self.ini = os.path.join(ROOT, "scenes", "povray.ini")
-        self.scratch = tempfile.mkdtemp(prefix="compare-scratch.", dir=cfg.work)
         self.counts = {"render": 0, "project": 0, "measure": 0, "reused": 0}
         self.images = []  # (path, array): the last few read, newest last
         self.truth = None  # (path, siproject.Reference): the scene's reference render
@@ -415,60 +385,51 @@ class Pipeline:
             self.rep.setdefault(approximation_key(opts), name)
 
     def close(self):
-        shutil.rmtree(self.scratch, ignore_errors=True)
         self.digest.save()
 
     # -- renders --
-    def render(self, scene, tag, width, height, povopts):
+    def render(self, scene, name, factor, povopts, out):
+        """The render of SCENE made by make (renders.make_render: the
+        Makefile's render target, its one staleness rule) in OUT, with
+        render.sh's statistics: POV-Ray's wall time (the smallest of up to
+        REPEATS runs for renders under 3 s) and its +GS statistics."""
         cfg = self.cfg
-        pov = os.path.join(cfg.scenedir, scene + ".pov")
-        out = os.path.join(cfg.work, "render", f"{scene}-{cfg.res_tag}-{tag}.exr")
-        side = out[:-4] + ".json"
-        stamp = {"schema": SCHEMA, "scene": self.digest(pov), "ini": self.digest(self.ini),
-                 "size": [width, height], "options": povopts}
-        info = fresh(side, stamp, [out])
-        if info:
-            self.counts["reused"] += 1
-            return out, info
-        os.makedirs(os.path.dirname(out), exist_ok=True)
-        say(f"render   {scene:<10} {tag:<8} {width} x {height}  {' '.join(povopts)}".rstrip())
-        walls, loads, stats = [], [], {}
-        for k in range(cfg.repeats):
-            target = out if k == 0 else os.path.join(self.scratch, f"repeat-{k}.exr")
-            loads.append(load_average())
-            t0 = time.perf_counter()
-            _, err = run(["bash", self.render_sh, pov, target, str(width), str(height)] + povopts + ["+GS"],
-                         f"rendering {rel(pov)} ({tag}, {width} x {height})")
-            walls.append(time.perf_counter() - t0)
-            if k == 0:
-                stats = povray_stats(err)
-            else:
-                remove(target)
-            if walls[-1] >= cfg.repeat_below:
-                break
-            if len(walls) >= 2 and abs(walls[-1] - walls[-2]) <= 0.05 * min(walls[-2:]):
-                break  # two runs agree: a third would not move the smallest much
-        if "pixels_traced" in stats:
-            rays = (stats["pixels_traced"] + stats["samples"]) / (width * height)
+        try:
+            path, stats, made = make_render(out, scene, (cfg.w, cfg.h), fmt_factor(factor), povopts,
+                                            scenedir=cfg.scenedir,
+                                            zp_nyquist=cfg.zp_nyquist, repeats=cfg.repeats)
+        except RenderError as e:
+            raise CompareError(str(e))
+        width, height = render_size(cfg, factor)
+        if "wall_s" not in stats:
+            raise CompareError(f"{rel(stats_path(path))}: no wall_s")
+        if "pixels" in stats:
+            rays = (stats["pixels"] + stats.get("samples", 0)) / (width * height)
         else:
             rays = None
-        info = {"stamp": stamp, "file": os.path.relpath(out, cfg.work), "width": width, "height": height,
-                "wall_s": min(walls), "wall_runs": walls, "load_before": loads,
-                "primary_rays_per_pixel": rays, "digest": self.digest(out), **stats}
-        write_json(side, info)
-        self.counts["render"] += 1
-        say(f"         {min(walls):.2f} s wall ({len(walls)} run(s)), "
-            f"{'%.2f' % rays if rays is not None else '?'} primary rays per pixel")
-        return out, info
+        info = {"file": os.path.relpath(path, cfg.work), "width": width, "height": height,
+                "wall_s": stats["wall_s"], "wall_runs": stats.get("wall_runs", [stats["wall_s"]]),
+                "primary_rays_per_pixel": rays, "digest": self.digest(path),
+                **{k: stats[k] for k in ("parse_s", "trace_s") if k in stats}}
+        if "pixels" in stats:
+            info["pixels_traced"] = stats["pixels"]
+            info["samples"] = stats.get("samples", 0)
+        if made:
+            self.counts["render"] += 1
+            say(f"         {name}: {info['wall_s']:.2f} s wall ({len(info['wall_runs'])} run(s)), "
+                f"{'%.2f' % rays if rays is not None else '?'} primary rays per pixel")
+        else:
+            self.counts["reused"] += 1
+        return path, info
 
     def factor_render(self, scene, factor):
-        w, h = render_size(self.cfg, factor)
-        opts = [f"Declare=ZP_K={self.cfg.zp_k}"] if scene == "zoneplate" else []
-        return self.render(scene, "f" + fmt_factor(factor), w, h, opts)
+        """RES x FACTOR rays per axis, antialiasing off: WORK/render/."""
+        return self.render(scene, "f" + fmt_factor(factor), factor, [], self.cfg.work)
 
     def aa_render(self, scene, aa):
-        opts = ([f"Declare=ZP_K={self.cfg.zp_k}"] if scene == "zoneplate" else []) + aa_options(aa)
-        return self.render(scene, "aa-" + aa, self.cfg.w, self.cfg.h, opts)
+        """POV-Ray's antialiasing at the final size: a render of factor 1 with
+        its options, in a folder of its own (WORK/pov-aa/AA/render/)."""
+        return self.render(scene, "aa-" + aa, 1, aa_options(aa), os.path.join(self.cfg.work, "pov-aa", aa))
 
     # -- projections --
     def project(self, scene, factor, method, render, rinfo):
@@ -678,8 +639,7 @@ def run_pipeline(cfg, pipe):
         # Renders first (the expensive part), the reference last among them.
         renders = {f: pipe.factor_render(scene, f) for f in cfg.factors}
         aas = {a: pipe.aa_render(scene, a) for a in cfg.aa}
-        ref, refinfo = pipe.render(scene, "f" + fmt_factor(cfg.ref_factor), *render_size(cfg, cfg.ref_factor),
-                                   [f"Declare=ZP_K={cfg.zp_k}"] if scene == "zoneplate" else [])
+        ref, refinfo = pipe.factor_render(scene, cfg.ref_factor)
         refdisp, refdinfo = pipe.box_of(scene, "ref", ref, refinfo, f"{cfg.w}x{cfg.h}", False)
         refs[scene] = {"render": os.path.relpath(ref, cfg.work), "render_s": refinfo["wall_s"],
                        "width": refinfo["width"], "height": refinfo["height"],
@@ -767,7 +727,7 @@ def main(argv):
                              if pipe.rep[approximation_key(o)] != m},
             "border": cfg.border, "cutoffs": cfg.cutoffs, "show_factor": cfg.show_factor,
             "zp_k": float(cfg.zp_k), "zp_samples_per_pixel": pipe.zp_spp(), "repeats": cfg.repeats,
-            "repeat_below_s": cfg.repeat_below,
+            "repeat_below_s": 3.0,  # scripts/render.sh's RENDER_REPEATS
             "tools": {k: v for k, v in tools.items() if k.endswith("_sha")},
             "povray": povray_version(), "nproc": os.cpu_count(),
             "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
@@ -788,9 +748,6 @@ def main(argv):
     except KeyboardInterrupt:
         log("interrupted")
         return 130
-    finally:
-        if pipe is not None:
-            shutil.rmtree(pipe.scratch, ignore_errors=True)
 
 
 def povray_version():

@@ -15,7 +15,7 @@ Images, RES x RES output pixels (u, v in output pixels):
   zoneplate-disk  the same, the error over the inscribed disk (radius
              RES/2 - BORDER) only, where the plate's content is isotropic:
              f_app on the SPP x SPP grid against the closed form
-  objects, edges  POV-Ray renders (scripts/render.sh, antialiasing off) at
+  objects, edges  POV-Ray renders (make render, antialiasing off) at
              every factor; the truth the render at REF_FACTOR
 The analytic images are sampled in float32 rather than rendered: POV-Ray
 writes half-precision EXR, whose rounding (2.4e-4 at 0.5) would dominate
@@ -37,20 +37,19 @@ error interpolated linearly in log density between the densities measured;
 the saving is 1 - that density.
 
 Writes REPORT/index.html, results.json, results.csv and error-vs-density.png
-(the folder built aside and renamed into place). Renders are kept in
-WORK/render with a sidecar of what they were made from. Any failure: a
+(the folder built aside and renamed into place). Renders are make's
+render targets in WORK/render (make render OUT=WORK ...), remade under the
+Makefile's one staleness rule. Any failure: a
 message on stderr, exit status 1, no partial report.
 """
 import argparse
 import csv
-import hashlib
 import html
 import io
 import json
 import math
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 import time
@@ -67,6 +66,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from atomic import write_atomic  # noqa: E402
+from renders import RenderError, make_render  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -97,32 +97,14 @@ def sampled(f, res, s):
     return f(x[None, :], x[:, None]).astype(np.float32)[:, :, None]
 
 
-def digest(path):
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()[:20]
-
-
-def render(work, scene, size):
-    """scenes/SCENE.pov at SIZE x SIZE through render.sh, kept in WORK/render."""
-    pov = os.path.join(ROOT, "scenes", scene + ".pov")
-    out = os.path.join(work, "render", f"{scene}-{size}.exr")
-    side = out[:-4] + ".json"
-    stamp = {"scene": digest(pov), "ini": digest(os.path.join(ROOT, "scenes", "povray.ini")), "size": size}
-    if os.path.exists(out) and os.path.exists(side):
-        with open(side) as f:
-            if json.load(f).get("stamp") == stamp:
-                return out
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    say(f"render   {scene} {size} x {size}")
-    r = subprocess.run(["bash", os.path.join(HERE, "render.sh"), pov, out, str(size), str(size)],
-                       capture_output=True, text=True)
-    if r.returncode != 0:
-        raise StudyError(f"rendering {scene} at {size} x {size} failed:\n{r.stderr.strip()}")
-    write_atomic(side, json.dumps({"stamp": stamp}) + "\n")
-    return out
+def render(work, scene, res, factor):
+    """scenes/SCENE.pov at RES x RES output pixels and FACTOR, made by make in
+    WORK (scripts/renders.py: the Makefile's render target and staleness
+    rule)."""
+    try:
+        return make_render(work, scene, res, factor)[0]
+    except RenderError as e:
+        raise StudyError(str(e))
 
 
 def methods(densities):
@@ -162,8 +144,8 @@ def measure(images, cfg):
                 app = k.resample((n, n), display="centred")[:, :, 0].astype(np.float64)
                 return float(np.sqrt(np.mean((app - truth)[disk] ** 2)))
         else:
-            inputs = {s: render(cfg.work, name, cfg.res * s) for s in cfg.factors}
-            ref = siproject.Reference(siproject.read_image(render(cfg.work, name, cfg.res * cfg.ref_factor)),
+            inputs = {s: render(cfg.work, name, cfg.res, s) for s in cfg.factors}
+            ref = siproject.Reference(siproject.read_image(render(cfg.work, name, cfg.res, cfg.ref_factor)),
                                       border=cfg.border)
             error = ref.l2_error
         for s in cfg.factors:

@@ -8,6 +8,13 @@
 #   scripts/render.sh scenes/zoneplate.pov out/zp.exr 256 256 Declare=ZP_K=201.06
 # RENDER_MESH_CAMERA=1: SCENE.pov is a mesh band of sirays mesh; its two
 # expected warnings are not shown.
+# RENDER_STATS=FILE: also writes FILE, lines of "NAME VALUE": wall_s (POV-Ray's
+# wall time, start-up and parse included), wall_runs, parse_s, trace_s
+# (POV-Ray's own times), pixels and samples (its primary rays: one per pixel
+# with antialiasing off, plus the supersamples of +A); POV-Ray's statistics
+# (+GS) are read for it and not shown. RENDER_REPEATS=N (default 1): a render
+# under 3 s is timed up to N times (the repeats to a discarded file), stopping
+# once two runs agree within 5 %; wall_s is the smallest.
 #
 # Quiet on success (only scene warnings and #debug output, on stderr).
 # POV-Ray writes to a temporary name in OUT's folder, renamed to OUT only on
@@ -59,10 +66,14 @@ mi=$(( (width * height * 20 + 1048575) / 1048576 + 64 ))
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/render-povray.XXXXXX")
 tmp=
+spare=
+stats_tmp=
 pid=
 cleanup() {
   [ -n "$pid" ] && kill "$pid" 2>/dev/null && wait "$pid" 2>/dev/null
   [ -n "$tmp" ] && rm -f -- "$tmp" "${tmp%.exr}.pov-state"
+  [ -n "$spare" ] && rm -f -- "$spare" "${spare%.exr}.pov-state"
+  [ -n "$stats_tmp" ] && rm -f -- "$stats_tmp"
   rm -rf -- "$work"
 }
 trap cleanup EXIT
@@ -99,10 +110,16 @@ filter_log() {
     banner && /^Support libraries used by POV-Ray:/ { libs = 1 }
     banner && libs && /^$/ { banner = 0; libs = 0; next }
     banner { next }
-    /^==== \[[A-Za-z ]+\.\.\.\] =+$/ { next }
-    /^POV-Ray finished$/ { next }
+    # +GS (RENDER_STATS): the statistics blocks, each a rule of dashes and
+    # its title up to the next section marker, are read into the stats file.
+    rule { rule = 0; if ($0 ~ /^(Parser|Render) Statistics$/) { skip = 1; next } print held }
+    /^-+$/ && !skip && stats { rule = 1; held = $0; next }
+    /^==== \[[A-Za-z ]+\.\.\.\] =+$/ { skip = 0; next }
+    /^POV-Ray finished$/ { skip = 0; next }
+    skip { next }
     { print }
-  ' "$log" | sed -e '/./,$!d' | if [ "${RENDER_MESH_CAMERA:-0}" = 1 ]; then
+    END { if (rule) print held }
+  ' stats="${stats:+1}" "$log" | sed -e '/./,$!d' | if [ "${RENDER_MESH_CAMERA:-0}" = 1 ]; then
     # POV-Ray wraps a message at 80 columns, its continuation lines indented:
     # each message is taken whole, and the two expected ones dropped.
     awk '
@@ -125,17 +142,32 @@ filter_log() {
 # POV-Ray's messages about it wrap between words.
 input=$scene run_dir=$PWD
 if [ "${RENDER_MESH_CAMERA:-0}" = 1 ]; then input=${scene##*/} run_dir=$scene_dir; fi
-set +e
-( cd -- "$run_dir" && HOME=$work/home POVINI=$ini exec povray \
-  +I"\"$input\"" +O"\"$tmp\"" +W"$width" +H"$height" \
-  -A +FE -D -P +MI"$mi" +L"\"$scene_dir\"" \
-  "$@" ) >"$log" 2>&1 </dev/null &
-pid=$!
-wait "$pid"
-rc=$?
-pid=
-set -e
+options=("$@")
+stats=${RENDER_STATS:-}
+repeats=${RENDER_REPEATS:-1}
+[[ $repeats =~ ^[1-9][0-9]*$ ]] ||
+  { echo "$prog: RENDER_REPEATS must be a positive whole number: '$repeats'" >&2; exit 64; }
+gs=()
+[ -n "$stats" ] && gs=(+GS)
+# povray TARGET: one run, its messages in $log, its wall time in $wall.
+povray_run() {
+  local t0 t1
+  t0=$(date +%s.%N)
+  set +e
+  ( cd -- "$run_dir" && HOME=$work/home POVINI=$ini exec povray \
+    +I"\"$input\"" +O"\"$1\"" +W"$width" +H"$height" \
+    -A +FE -D -P +MI"$mi" +L"\"$scene_dir\"" \
+    "${options[@]}" "${gs[@]}" ) >"$log" 2>&1 </dev/null &
+  pid=$!
+  wait "$pid"
+  rc=$?
+  pid=
+  set -e
+  t1=$(date +%s.%N)
+  wall=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", b - a }')
+}
 
+povray_run "$tmp"
 if [ "$rc" -ne 0 ]; then
   filter_log >&2
   echo "$prog: povray failed with status $rc rendering $scene" >&2
@@ -147,6 +179,39 @@ if [ ! -s "$tmp" ]; then
   exit 1
 fi
 filter_log >&2
+if [ -n "$stats" ]; then
+  # POV-Ray's statistics of the first run, then the repeats' wall times.
+  walls=$wall
+  stats_text=$(awk -v wall="$wall" '
+    /^Pixels:/ { pixels = $2; samples = $4 }
+    /^  Parse Time:/ { match($0, /\(([0-9.]+) seconds\)/); parse = substr($0, RSTART + 1, RLENGTH - 10) }
+    /^  Trace Time:/ { match($0, /\(([0-9.]+) seconds\)/); trace = substr($0, RSTART + 1, RLENGTH - 10) }
+    END { printf "parse_s %s\ntrace_s %s\npixels %s\nsamples %s\n", parse, trace, pixels, samples }
+  ' "$log")
+  again=$(mktemp --suffix=.exr -- "$out_dir/.${out##*/}.repeat.XXXXXX")
+  spare=$again
+  for (( k = 1; k < repeats; k++ )); do
+    last=${walls##* }
+    awk -v w="$last" 'BEGIN { exit !(w < 3) }' || break
+    povray_run "$again"
+    rm -f -- "$again"
+    [ "$rc" -eq 0 ] || { filter_log >&2; echo "$prog: povray failed with status $rc timing $scene again" >&2; exit "$rc"; }
+    walls="$walls $wall"
+    # two runs within 5 % of each other: a third would not move the smallest much
+    awk -v a="$last" -v b="$wall" 'BEGIN { d = a - b; if (d < 0) d = -d; m = a < b ? a : b; exit !(d <= 0.05 * m) }' && break
+  done
+  rm -f -- "$spare"
+  spare=
+  stats_tmp=$(mktemp -- "$(dirname -- "$(realpath -m -- "$stats")")/.${stats##*/}.XXXXXX")
+  {
+    printf 'wall_s %s\n' "$(printf '%s\n' $walls | sort -g | head -n 1)"
+    printf 'wall_runs %s\n' "$walls"
+    printf '%s\n' "$stats_text"
+  } > "$stats_tmp"
+  chmod "$(printf '%o' $(( 0666 & ~0$(umask) )))" -- "$stats_tmp"
+  mv -f -- "$stats_tmp" "$stats"
+  stats_tmp=
+fi
 chmod "$(printf '%o' $(( 0666 & ~0$(umask) )))" -- "$tmp"  # mktemp makes 0600
 mv -f -- "$tmp" "$out"
 tmp=

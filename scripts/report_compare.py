@@ -744,7 +744,7 @@ def build_html(meta, rows, d, charts, scene_cards, files):
         "DFT energy of the displayed luminance, mean removed, above the cutoff in cycles/pixel (whole image). "
         "<i>Overshoot</i>: how far the display leaves [min, max] of the input samples under each pixel and one "
         "pixel around it (the method's own render; for POV-Ray's antialiasing the reference render). "
-        "<i>Time</i>: wall time of scripts/render.sh (POV-Ray, start-up and parse included; smallest of "
+        "<i>Time</i>: POV-Ray's wall time as scripts/render.sh records it (start-up and parse included; smallest of "
         f"{m['repeats']} runs for renders under {m['repeat_below_s']:g} s) plus the projection's (the render read, "
         f"projected and resampled by the engine, in process; smallest of {m['repeats']} runs); POV-Ray's antialiasing: its render alone. POV-Ray baselines: +A0.0 "
         "(threshold 0: every pixel supersampled) with +AM1 (an n x n grid plus the centre ray, n = +R) or +AM2 "

@@ -5,8 +5,9 @@ and every number in OUT/stability.json and OUT/*.csv.
 
     stability.py --build build --out out/report/stability [--quick]
 
-Renders (POV-Ray through scripts/render.sh) are cached under
-OUT/../../stability-render/ and redone only when missing. Every method and
+Renders are make's render targets (scripts/renders.py) in
+OUT/../../stability-render/ (make render OUT=...), remade under the
+Makefile's one staleness rule (scene, povray.ini, size, factor, options). Every method and
 remedy is projected, and measured (continuous L2 error, display RMS,
 overshoot and negatives), by the Python module siproject; the synthetic
 studies (noise gain, step response, prefilter numerics) come from the
@@ -36,6 +37,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from renders import RenderError, make_render  # noqa: E402
 
 # siproject's keywords of each method and remedy (the Makefile's METHOD_OPTS_*).
 METHODS = {
@@ -69,23 +72,21 @@ def run(cmd, capture=True):
     return r.stdout
 
 
-def render(scene, path, w, h, extra=()):
-    """Renders once; returns the wall time of this or the recorded render."""
-    stamp = path + ".time"
-    if os.path.exists(path) and os.path.exists(stamp):
-        with open(stamp) as f:
-            return float(f.read())
-    t = time.monotonic()
-    run(["bash", os.path.join(ROOT, "scripts/render.sh"), os.path.join(ROOT, "scenes", scene + ".pov"),
-         path, str(w), str(h), *extra])
-    dt = time.monotonic() - t
-    with open(stamp, "w") as f:
-        f.write(f"{dt:.3f}")
-    return dt
+def render(tools, work, scene, res, factor):
+    """The render of SCENE at RES x RES output pixels and FACTOR, made by make
+    in WORK (the Makefile's render target and staleness rule; the zone
+    plate's ZP_K declared by it, 0.7 of Nyquist). Returns its path and
+    POV-Ray's wall time when it was rendered."""
+    try:
+        path, stats, _ = make_render(work, scene, res, factor, zp_nyquist=0.7, build=tools.build)
+    except RenderError as e:
+        fail(str(e))
+    return path, stats["wall_s"]
 
 
 class Tools:
     def __init__(self, build):
+        self.build = build
         self.sistability = os.path.join(build, "tools/sistability")
         if not os.access(self.sistability, os.X_OK):
             fail(f"{self.sistability} is missing: run make build")
@@ -112,8 +113,7 @@ def factor_sweep(tools, work, res, factors):
     k = zoneplate_k(res)
     rows = []
     for f in factors:
-        src = os.path.join(work, f"zoneplate-{res}-f{f}.exr")
-        t_render = render("zoneplate", src, res * f, res * f, [f"Declare=ZP_K={k:.6f}"])
+        src, t_render = render(tools, work, "zoneplate", res, f)
         for m, opts in METHODS.items():
             if m.endswith("-2x2"):
                 continue  # the display does not change f_app: same error as its centred twin
@@ -139,10 +139,8 @@ def crossover(rows, a, b):
 
 
 def edges_study(tools, work, res, factor, ref_factor):
-    src = os.path.join(work, f"edges-{res}-f{factor}.exr")
-    ref = os.path.join(work, f"edges-{res}-f{ref_factor}.exr")
-    render("edges", src, res * factor, res * factor)
-    render("edges", ref, res * ref_factor, res * ref_factor)
+    src, _ = render(tools, work, "edges", res, factor)
+    ref, _ = render(tools, work, "edges", res, ref_factor)
     samples, truth = siproject.read_image(src), siproject.read_image(ref)
     rows = []
     for m, opts in METHODS.items():
@@ -157,10 +155,8 @@ def edges_study(tools, work, res, factor, ref_factor):
 
 
 def hdr_study(tools, work, res, factor, ref_factor):
-    src = os.path.join(work, f"hdr-{res}-f{factor}.exr")
-    ref = os.path.join(work, f"hdr-{res}-f{ref_factor}.exr")
-    render("hdr", src, res * factor, res * factor)
-    render("hdr", ref, res * ref_factor, res * ref_factor)
+    src, _ = render(tools, work, "hdr", res, factor)
+    ref, _ = render(tools, work, "hdr", res, ref_factor)
     samples = siproject.read_image(src)
     # The display the reference would give: the area average of its samples.
     ref_display = checked(siproject.project, ref, size=res, **METHODS["box"])

@@ -7,7 +7,9 @@
 # no test): every competitor has a row with a positive wall time and peak
 # memory, each ratio is its wall time over the floor's, siproject's outputs at
 # 1 and 2 threads are bit-identical, every target has its verdict line, and
-# no temporary file is left. Then a missing binary fails cleanly: exit status
+# no temporary file is left; the scattered render's rows (siproject on a
+# jitter render and on the regular render of its size) and its mesh bands'
+# rows, whose rays add up to the render's. Then a missing binary fails cleanly: exit status
 # 1, a message naming it, no report written.
 set -euo pipefail
 [ $# -eq 2 ] || { echo "usage: ${0##*/} SOURCE_DIR BUILD_DIR" >&2; exit 64; }
@@ -35,13 +37,19 @@ want += ["siproject min-error cubic 2x2", "siproject min-error cubic centred",
          "siproject min-error cubic 2x2 --threads 2"]
 missing = [w for w in want if w not in names]
 assert not missing, f"competitors missing from the table: {missing}"
-assert any(n.startswith("siproject min-error cubic 2x2, ") for n in names), "no run at scale"
+assert any(r["group"] == "big" and r["competitor"].startswith("siproject min-error cubic 2x2, ")
+           for r in rows), "no run at scale"
+scattered = [r for r in rows if r["group"] == "scattered"]
+assert [r["competitor"].split(", ")[1].split()[1] for r in scattered] == ["regular", "jitter"], \
+    f"the scattered rows: {[r['competitor'] for r in scattered]}"
+# both of 500^2 rays (--quick: 125^2 output pixels, factor 4)
+assert all(r["input"] == "250000 rays" for r in scattered), [r["input"] for r in scattered]
 by = {r["competitor"]: r for r in rows}
 floor = float(by["decode floor (sidecode)"]["wall_median_s"])
 for r in rows:
     wall, rss = float(r["wall_median_s"]), float(r["peak_rss_mb"])
     assert wall > 0 and rss > 0, f"{r['competitor']}: wall {wall}, peak {rss}"
-    if r["group"] != "big":
+    if r["group"] not in ("big", "scattered"):
         # the csv rounds walls to 1 ms and ratios to 0.01: the ratio of the
         # rounded walls is off by up to R (0.0005 / wall + 0.0005 / floor)
         ratio = wall / floor
@@ -55,7 +63,10 @@ verdicts = re.findall(r"^- (?:met|\*\*not met\*\*): (.*)$", md, re.M)
 for target in ("oiiotool bspline time", "the decode floor", "peak memory", "compute stage",
                "bit-identical"):
     assert any(target in v for v in verdicts), f"no verdict on {target}"
-print(f"ok: {len(rows)} rows, {len(verdicts)} verdicts")
+# the scattered render's mesh bands, each with its sirays mesh and parse times
+band_rows = re.findall(r"^\| (\d+) \| (\d+) \| \d+ \| ([0-9.]+) \| ([0-9.]+) \| ", md, re.M)
+assert band_rows and sum(int(b[1]) for b in band_rows) == 250000, f"mesh bands: {band_rows}"
+print(f"ok: {len(rows)} rows, {len(verdicts)} verdicts, {len(band_rows)} mesh band(s)")
 PY
 # a missing binary: status 1, named, nothing written
 set +e
