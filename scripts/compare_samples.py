@@ -35,6 +35,7 @@ import numpy as np
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 import siproject  # noqa: E402
 
 from report_compare import SEED_HP  # noqa: E402
@@ -344,13 +345,16 @@ def charts(a, rows, report):
             for j, m in enumerate(METHODS):
                 ax = axes[i][j]
                 for pattern in PATTERNS:
-                    pts = sorted((float(np.mean([r[xkey] for r in rs])), float(np.mean([r["l2"] for r in rs])))
-                                 for (s, mm, x, p), rs in g.items() if s == scene and mm == m and p == pattern)
+                    # in the order of density, so that each line runs from the fewest rays to the most
+                    pts = [q for _, q in sorted(
+                        (x, (float(np.mean([r[xkey] for r in rs])), float(np.mean([r["l2"] for r in rs]))))
+                        for (s, mm, x, p), rs in g.items() if s == scene and mm == m and p == pattern)]
                     pts = [q for q in pts if np.isfinite(q[0])]
                     ax.plot([q[0] for q in pts], [q[1] for q in pts], label=pattern, lw=1, ms=4,
                             **PATTERN_STYLE[pattern])
                 ax.set_xscale("log", base=2)
-                ax.set_yscale("log")
+                ax.xaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
+                ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
                 ax.tick_params(labelsize=7)
                 ax.set_title(f"{scene}: {m}", fontsize=8)
                 if i == len(scenes) - 1:
