@@ -493,7 +493,11 @@ compare-hex: $(if $(PREBUILT),,build)
 # (scripts/compare_samples.py): every scene, pattern, density and seed
 # rendered as make's render targets (make render SAMPLES=... in
 # $(CS_WORK)), each method's L2 error against the truth, its displayed
-# image's error, the high-pass share, their spread across seeds. Report:
+# image's error, the high-pass share, their spread across seeds, and each
+# render's wall time (scripts/timed_make.sh: .NAME.seconds beside a render,
+# written when make made it). The reference's own grid: on CS_REF_CHECK
+# (a scene, or empty for none) the errors also against a regular reference at
+# CS_REF_ALT_FACTOR and a jittered one (seed 0) at CS_REF_FACTOR. Report:
 # $(OUT)/report/samples/ (QUICK: $(OUT)/report-quick/samples/, 64 x 64,
 # 4 and 16 rays per pixel, 2 seeds, three scenes).
 ifneq ($(QUICK),)
@@ -502,30 +506,40 @@ CS_RES       ?= 64
 CS_FACTORS   ?= 2 4
 CS_SEEDS     ?= 0 1
 CS_REF_FACTOR ?= 8
+CS_REF_ALT_FACTOR ?= 4
 else
 CS_SCENES    ?= checker objects edges zoneplate
 CS_RES       ?= 256
 CS_FACTORS   ?= 1.41421356 2 2.82842712 4
 CS_SEEDS     ?= 0 1 2 3
 CS_REF_FACTOR ?= 32
+CS_REF_ALT_FACTOR ?= 16
 endif
+CS_REF_CHECK ?= checker
 CS_WORK ?= $(OUT)/compare-samples$(if $(QUICK),-quick)
 CS_MAKE = $(MAKE) --no-print-directory SIPROJECT=$(SIPROJECT) SIMETRICS=$(SIMETRICS) SIRAYS=$(SIRAYS) \
   OUT=$(CS_WORK) RES=$(CS_RES) ZP_NYQUIST=$(ZP_NYQUIST)
 .PHONY: compare-samples
 compare-samples: $(if $(PREBUILT),,build)
-	@set -e; for s in $(CS_SCENES); do \
+	@set -e; r=$(CS_WORK)/render; \
+	for s in $(CS_SCENES); do \
 	  [ $$s = zoneplate ] || $(CS_MAKE) SCENE=$$s FACTOR=$(CS_REF_FACTOR) render; \
 	  for f in $(CS_FACTORS); do \
-	    $(CS_MAKE) SCENE=$$s FACTOR=$$f render; \
+	    bash scripts/timed_make.sh $$r/$$s-$(CS_RES)-f$$f.exr $(CS_MAKE) SCENE=$$s FACTOR=$$f render; \
 	    for p in jitter sobol; do for k in $(CS_SEEDS); do \
-	      $(CS_MAKE) -j$(JOBS) SCENE=$$s FACTOR=$$f SAMPLES=$$p SEED=$$k render; \
+	      bash scripts/timed_make.sh $$r/$$s-$(CS_RES)-f$$f-$$p-s$$k.exr \
+	        $(CS_MAKE) -j$(JOBS) SCENE=$$s FACTOR=$$f SAMPLES=$$p SEED=$$k render; \
 	    done; done; \
 	  done; \
+	done; \
+	for s in $(CS_REF_CHECK); do \
+	  $(CS_MAKE) SCENE=$$s FACTOR=$(CS_REF_ALT_FACTOR) render; \
+	  $(CS_MAKE) -j$(JOBS) SCENE=$$s FACTOR=$(CS_REF_FACTOR) SAMPLES=jitter SEED=0 render; \
 	done
 	@$(PYTHON) scripts/compare_samples.py --work $(CS_WORK) --report $(OUT)/$(if $(QUICK),report-quick,report)/samples \
 	  --scenes '$(CS_SCENES)' --res $(CS_RES) --factors '$(CS_FACTORS)' --seeds '$(CS_SEEDS)' \
-	  --ref-factor $(CS_REF_FACTOR) --zp-nyquist $(ZP_NYQUIST)
+	  --ref-factor $(CS_REF_FACTOR) --ref-check '$(CS_REF_CHECK)' --ref-alt-factor $(CS_REF_ALT_FACTOR) \
+	  --zp-nyquist $(ZP_NYQUIST)
 # ==== end of comparison ========================================================
 
 # ---- bench: siproject against oiiotool, splineops and the decode floor ---------

@@ -15,13 +15,13 @@ trap 'rm -rf -- "$tmp"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 mk() {
   make -C "$src" --no-print-directory SIPROJECT="$siproject" SIMETRICS="$simetrics" SIRAYS="$sirays" \
-    OUT="$tmp/out" compare-samples QUICK=1 CS_SCENES="checker zoneplate" CS_FACTORS=2 >"$1" 2>&1 || { cat "$1" >&2; fail "make compare-samples QUICK=1"; }
+    OUT="$tmp/out" compare-samples QUICK=1 CS_SCENES="checker zoneplate" CS_FACTORS=2 CS_REF_CHECK= >"$1" 2>&1 || { cat "$1" >&2; fail "make compare-samples QUICK=1"; }
 }
 mk "$tmp/log1"
 md=$tmp/out/report-quick/samples/samples.md
 [ -s "$md" ] && [ -s "$tmp/out/report-quick/samples/samples.png" ] && [ -s "$tmp/out/report-quick/samples/samples.csv" ] ||
   fail "the report's files are missing"
-rows=$(grep -cE '^\| (checker|zoneplate) \| ' "$md" || true)
+rows=$(sed -n '/^## All numbers/,$p' "$md" | grep -cE '^\| (checker|zoneplate) \| ' || true)
 [ "$rows" -eq 30 ] || fail "expected 30 rows (2 scenes, 5 methods, 1 density, 3 patterns), found $rows"
 grep -qiE '\| (nan|inf)' "$md" && fail "a number is not finite"
 echo "ok: 30 rows, finite, chart written"
