@@ -8,7 +8,8 @@ render (its default box filter and --filter lanczos3; maketx's level
 log2(factor) + j has level j's size).
 
 Measures per level:
-  l2       continuous L2 error (RMS over the frame) of the approximation
+  l2       continuous L2 error (RMS over the frame; the zone plate at 8 * 2^j
+           points per level-j pixel and axis) of the approximation
            against the truth: the zone plate's closed form, else the render
            at --ref-factor. siproject: its level's coefficients. maketx: its
            level's pixels as a piecewise-constant image (the box space; a
@@ -100,8 +101,11 @@ def main():
         ref = siproject.Reference(siproject.read_image(ref_path)) if scene != "zoneplate" else None
         K = zp_k(R) if scene == "zoneplate" else None
 
-        def l2(k):
-            return siproject.l2_error(k, zoneplate=K) if K else siproject.l2_error(k, ref)
+        def l2(k, j):
+            # the closed form at 8 * 2^j points per level-j pixel and axis:
+            # the same points over the frame at every level
+            return (siproject.l2_error(k, zoneplate=K, samples_per_pixel=8 * 2 ** j) if K
+                    else siproject.l2_error(k, ref))
 
         tx = {}
         for name, extra in (("maketx box", []), ("maketx lanczos3", ["--filter", "lanczos3"])):
@@ -116,7 +120,7 @@ def main():
                 k = siproject.coefficients(src, size=(w, h), generator=gen)
                 shown = siproject.project(src, size=(w, h), generator=gen, display=disp)
                 row[f"siproject {gen} {disp}"] = {
-                    "l2": l2(k), "shown": float(np.sqrt(np.mean((shown - area) ** 2))),
+                    "l2": l2(k, j), "shown": float(np.sqrt(np.mean((shown - area) ** 2))),
                     "negative": int((shown < 0).sum())}
             for name, path in tx.items():
                 lvl = os.path.join(args.work, f"{scene}-level.exr")
@@ -124,7 +128,7 @@ def main():
                 img = siproject.read_image(lvl)
                 assert img.shape[:2] == (h, w), (name, j, img.shape)
                 k = siproject.coefficients(img, factor=1, generator="box")  # the pixels, as they are
-                row[name] = {"l2": l2(k), "shown": float(np.sqrt(np.mean((img - area) ** 2))),
+                row[name] = {"l2": l2(k, j), "shown": float(np.sqrt(np.mean((img - area) ** 2))),
                              "negative": int((img < 0).sum())}
             rows[j] = row
         timing = {}
