@@ -489,6 +489,27 @@ compare-hex: $(if $(PREBUILT),,build)
 	@$(PYTHON) scripts/compare_hex.py --work $(OUT)/compare-hex$(if $(QUICK),-quick) \
 	  --report $(OUT)/$(if $(QUICK),report-quick,report)/hex \
 	  $(if $(QUICK),--res 64 --factors "2 4" --ref-factor 8 --spp 8 --border 8)
+# make compare-mip [QUICK=1]: pyramids against maketx (scripts/compare_mip.py):
+# objects, zoneplate and checker from a render at factor 8 of a 1024 x 1024
+# frame, levels 0 to 5 by siproject (box, tent, cubic; centred and 2x2)
+# against maketx's levels of the same render (box, lanczos3): continuous L2
+# error against the truth (factor 32, the zone plate's closed form), the
+# displayed level against the truth's area averages, negative samples, time
+# and peak memory of the whole pyramid. $(OUT)/report/mip/ (QUICK:
+# $(OUT)/report-quick/mip/, objects at 128 x 128 and zoneplate at 256 x 256,
+# one timing run each).
+.PHONY: compare-mip
+compare-mip: $(if $(PREBUILT),,build)
+	@test -x $(PYTHON) || { echo "compare-mip: $(PYTHON) not found: run scripts/setup.sh (make setup)" >&2; exit 1; }
+ifneq ($(QUICK),)
+	@$(PYTHON) scripts/compare_mip.py --scenes objects --res 128 --repeat 1 --out $(OUT) \
+	  --siproject $(BUILD)/tools/siproject --work $(OUT)/compare-mip-quick --report $(OUT)/report-quick/mip-objects
+	@$(PYTHON) scripts/compare_mip.py --scenes zoneplate --res 256 --repeat 1 --out $(OUT) \
+	  --siproject $(BUILD)/tools/siproject --work $(OUT)/compare-mip-quick --report $(OUT)/report-quick/mip-zoneplate
+else
+	@$(PYTHON) scripts/compare_mip.py --out $(OUT) --siproject $(BUILD)/tools/siproject \
+	  --work $(OUT)/compare-mip --report $(OUT)/report/mip
+endif
 # make compare-samples [QUICK=1]: the sample patterns compared
 # (scripts/compare_samples.py): every scene, pattern, density and seed
 # rendered as make's render targets (make render SAMPLES=... in

@@ -61,6 +61,8 @@ struct Options {
   // --merge: the inputs are partial files, added into one projection.
   bool partial = false, merge = false;
   bool display_given = false, clamp_given = false;
+  // --mip: a tiled, MIP-mapped OpenEXR of every level (sis/pyramid.h)
+  bool mip = false;
 };
 
 using Clock = std::chrono::steady_clock;
@@ -136,9 +138,122 @@ int write_partial_of(const Options& o, const Resolved& r, InputSet set) {
   return 0;
 }
 
+// siproject --mip: every level of the pyramid from one reading, displayed
+// at its size, written as one tiled, MIP-mapped OpenEXR (maketx's level
+// sizes). The range keys are of all levels together.
+int write_mip_of(const Options& o, const Resolved& r, InputSet set, SampleFormat out_format,
+                 bool format_given) {
+  const auto t_start = Clock::now();
+  const std::vector<std::string> names = set.channel_names;
+  const std::string input_label = set.label;
+  const long win = set.width, hin = set.height;
+  const int C = set.channels;
+  FormRequest fr;
+  Progress progress(!o.quiet, "reading and acquiring");
+  fr.progress = [&](double f) { progress.update(f); };
+  std::vector<Formed> levels = form_pyramid(o.settings, r, std::move(set), fr);
+  for (const std::string& w : levels.front().warnings)
+    if (!o.quiet) std::cerr << "siproject: warning: " << w << "\n";
+  const Coefficients& k = levels.front().coefficients;
+  RangeReport before, after;
+  before.min = after.min = HUGE_VAL;
+  before.max = after.max = -HUGE_VAL;
+  bool own_range = true;
+  double acquire = 0, prefilter = 0, resample = 0;
+  for (const Formed& f : levels) {
+    before.min = std::min(before.min, f.final.before.min);
+    before.max = std::max(before.max, f.final.before.max);
+    after.min = std::min(after.min, f.final.after.min);
+    after.max = std::max(after.max, f.final.after.max);
+    before.negative += f.final.before.negative;
+    before.out_of_range += f.final.before.out_of_range;
+    before.samples += f.final.before.samples;
+    own_range = own_range && f.final.own_range;
+    acquire = std::max(acquire, f.acquire_seconds);
+    prefilter += f.prefilter_seconds;
+    resample += f.resample_seconds;
+  }
+  constexpr float kHalfMax = 65504.0f;
+  long half_clamped = 0;
+  if (out_format == SampleFormat::Half && (after.max > kHalfMax || after.min < -kHalfMax)) {
+    if (!format_given) {
+      out_format = SampleFormat::Float;
+      if (!o.quiet)
+        std::fprintf(stderr,
+                     "siproject: warning: the output reaches %g, beyond half's largest value "
+                     "65504: written as float (-d half clamps instead)\n",
+                     std::max(after.max, -after.min));
+    } else {
+      for (Formed& f : levels)
+        for (float& v : f.final.image.data)
+          if (std::abs(v) > kHalfMax) v = std::copysign(kHalfMax, v), ++half_clamped;
+      after.min = std::max(after.min, -double(kHalfMax));
+      after.max = std::min(after.max, double(kHalfMax));
+      if (!o.quiet)
+        std::fprintf(stderr, "siproject: warning: -d half: %ld samples beyond +-65504 clamped there\n",
+                     half_clamped);
+    }
+  }
+  const Metadata md = {
+      {"sis:method", k.min_error ? "min-error" : "conventional"},
+      {"sis:generator", generator_name(k)},
+      {"sis:display", levels.front().display.name()},
+      {"sis:boundary", boundary_name(k.boundary)},
+      {"sis:input", input_label},
+      {"sis:input_transfer", k.input.transfer.name()},
+      {"sis:highlight_compress", k.highlight_compressed ? "1" : "0"},
+      {"sis:clamp", clamp_name(r.clamp)},
+      {"sis:output_min", std::to_string(after.min)},
+      {"sis:output_max", std::to_string(after.max)},
+      {"sis:negative_before_clamp", std::to_string(before.negative)},
+      {"sis:out_of_range_before_clamp",
+       own_range ? std::to_string(before.out_of_range) : std::string("unknown")},
+      {"sis:lattice", space_name(k.space)},
+      {"sis:half_clamped", std::to_string(half_clamped)},
+      {"sis:mip_levels", std::to_string(levels.size())},
+      // the boundary rule the levels were projected under, as texture lookups wrap
+      {"wrapmodes", k.boundary == Boundary::Periodic ? "periodic,periodic" : "mirror,mirror"},
+      {"Software", "siproject"},
+  };
+  std::vector<Image> images;
+  for (Formed& f : levels) images.push_back(std::move(f.final.image));
+  const int alpha = levels.front().inputs.alpha;
+  levels.clear();
+  const auto t = Clock::now();
+  StagedFile file = stage_mip_image(o.output, images, names, md, alpha, out_format);
+  file.commit();
+  const double t_write = seconds_since(t);
+  if (o.verbose) {
+    std::fprintf(stderr,
+                 "siproject: %ld x %ld x %d -> %zu MIP levels from %ld x %ld, %s %s, display %s, "
+                 "boundary %s, %d threads\n"
+                 "siproject: read+acquire %.3f s, prefilter %.3f s, resample %.3f s, write %.3f s, "
+                 "total %.3f s\n",
+                 win, hin, C, images.size(), images.front().width, images.front().height,
+                 k.min_error ? "min-error" : "conventional", generator_name(k).c_str(),
+                 md[2].second.c_str(), boundary_name(k.boundary).c_str(), r.threads, acquire,
+                 prefilter, resample, t_write, seconds_since(t_start));
+    std::fprintf(stderr, "siproject: output range [%g, %g] over every level, %ld negative samples\n",
+                 before.min, before.max, before.negative);
+  }
+  return 0;
+}
+
 int run(const Options& o) {
   const auto t_start = Clock::now();
   if (o.verbose && o.quiet) throw UsageError("-v and -q exclude each other");
+  if (o.mip) {
+    if (!holds_coefficients(o.output))
+      throw UsageError("--mip: -o " + o.output + ": a MIP-mapped texture is written as OpenEXR "
+                       "(.exr), as maketx writes them");
+    if (o.partial) throw UsageError("--mip and --partial exclude each other");
+    if (!o.coeffs.empty())
+      throw UsageError("--mip: --coeffs is not taken with --mip (a coefficient file holds one "
+                       "level); write the levels' coefficients by a run per level");
+    if (!o.compression.empty() || o.quality)
+      throw UsageError("--mip: the texture's tiles are zip-compressed, as maketx writes them; "
+                       "--compression and --quality are not taken with --mip");
+  }
   const Settings& st = o.settings;
   const Resolved r = resolve(st);
   const int threads = r.threads;
@@ -233,6 +348,7 @@ int run(const Options& o) {
                    set.integer_bits, bits, o.output.c_str(),
                    set.integer_bits > 16 ? "-d float with .tif or .exr" : ".png, .tif or -d float");
   }
+  if (o.mip) return write_mip_of(o, r, std::move(set), out_format, data_format.has_value());
   const std::vector<std::string> names = set.channel_names;
   const std::string input_label = set.label;
   const long win = set.width, hin = set.height;
@@ -576,6 +692,10 @@ int main(int argc, char** argv) try {
   app.add_option("--framepadding", o.framepadding,
                  "digits of the frame numbers of # and @ patterns [default: 4 per #, 1 per @]")
       ->check(CLI::Range(1, 18));
+  app.add_flag("--mip", o.mip,
+               "write -o (.exr) as a tiled, MIP-mapped OpenEXR texture: every level (maketx's "
+               "sizes, each halving, down to 1x1) projected from the samples onto the space at "
+               "its own size, displayed by --display (Cartesian lattice)");
   app.add_flag("--bands", o.bands,
                "the inputs are row bands of one image, projected as one (placed by their data "
                "windows, e.g. partial renders cropped with oiiotool --crop)");

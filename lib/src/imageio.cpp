@@ -1431,6 +1431,63 @@ StagedFile stage_image(const std::string& path, const Image& image,
   return stage(path, spec, TypeDesc::FLOAT, enc.data(), compression);
 }
 
+StagedFile stage_mip_image(const std::string& path, const std::vector<Image>& levels,
+                           const std::vector<std::string>& channel_names, const Metadata& metadata,
+                           int alpha_channel, SampleFormat format, int tile_size) {
+  if (levels.empty()) throw OutputError(path + ": a MIP-map needs at least one level");
+  check_output(path);
+  if (!holds_coefficients(path))
+    throw OutputError(path + ": a MIP-mapped texture is written as OpenEXR (.exr)");
+  if (format != SampleFormat::Half && format != SampleFormat::Float)
+    throw OutputError(path + ": a MIP-mapped OpenEXR holds half or float samples");
+  const TypeDesc stored = format == SampleFormat::Half ? TypeDesc::HALF : TypeDesc::FLOAT;
+  const Image& top = levels.front();
+  check_output_image(path, top.channels, top.width, top.height, stored == TypeDesc::HALF);
+  auto out = ImageOutput::create(path);
+  if (!out) throw OutputError(path + ": cannot write OpenEXR: " + OIIO::geterror());
+  StagedFile file(path);
+  CheckedFile proxy(file.temporary(), file.fd());
+  bool ok = out->set_ioproxy(&proxy);
+  for (std::size_t j = 0; ok && j < levels.size(); ++j) {
+    const Image& level = levels[j];
+    ImageSpec spec(int(level.width), int(level.height), level.channels, stored);
+    spec.tile_width = spec.tile_height = tile_size;
+    if (int(channel_names.size()) == level.channels) spec.channelnames = channel_names;
+    if (alpha_channel >= 0 && alpha_channel < level.channels) spec.alpha_channel = alpha_channel;
+    spec.attribute("textureformat", "Plain Texture");
+    spec.attribute("openexr:levelmode", 1);     // MIPMAP_LEVELS
+    spec.attribute("openexr:roundingmode", 0);  // ROUND_DOWN, as maketx
+    for (const auto& [k, v] : metadata) spec.attribute(k, v);
+    ok = out->open(file.temporary(), spec, j == 0 ? ImageOutput::Create : ImageOutput::AppendMIPLevel);
+    if (!ok) break;
+    if (stored == TypeDesc::HALF) {
+      Buffer<std::uint16_t> half(level.data.size());
+      float_to_half(level.data.data(), half.data(), half.size());
+      ok = out->write_image(TypeDesc::HALF, half.data());
+    } else {
+      ok = out->write_image(TypeDesc::FLOAT, level.data.data());
+    }
+  }
+  ok = ok && out->close();
+  const std::string why = out->geterror();
+  out.reset();
+  if (proxy.failure()) throw OutputError(path + ": cannot write: " + std::strerror(proxy.failure()));
+  if (!ok) throw OutputError(path + ": " + (why.empty() ? "write failed" : why));
+  file.close();
+  // read back: every level there, of its size
+  auto back = ImageInput::open(file.temporary());
+  bool readable = back != nullptr;
+  for (std::size_t j = 0; readable && j < levels.size(); ++j)
+    readable = back->seek_subimage(0, int(j)) && back->spec().width == levels[j].width &&
+               back->spec().height == levels[j].height;
+  if (readable) readable = !back->seek_subimage(0, int(levels.size()));
+  if (back) back->close();
+  if (!readable)
+    throw OutputError(path + ": the OpenEXR writer made a MIP-map that does not read back as its " +
+                      std::to_string(levels.size()) + " levels; nothing written");
+  return file;
+}
+
 void write_coefficients(const std::string& path, const Coefficients& k,
                         const std::vector<std::string>& channel_names, const Metadata& extra) {
   stage_coefficients(path, k, channel_names, extra).commit();

@@ -1,4 +1,5 @@
 #include "sis/settings.h"
+#include "sis/pyramid.h"
 
 #include "sis/partial.h"
 
@@ -305,6 +306,46 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
     Buffer<double>().swap(k.c.data);
   }
   return f;
+}
+
+std::vector<Formed> form_pyramid(const Settings& o, const Resolved& r, InputSet set,
+                                 const FormRequest& fr) {
+  if (set.coefficient_file)
+    throw RequestError("--mip: " + set.label + " is a coefficient file, which holds one level; "
+                       "every level of a pyramid is projected from the samples");
+  if (set.partial_files)
+    throw RequestError("--mip: " + set.label + " are partial files; a pyramid is projected "
+                       "from the samples (merge them first, or give the render)");
+  if (set.scattered_file)
+    throw RequestError("--mip: " + set.label + " holds scattered samples; a pyramid is "
+                       "projected from a grid of samples");
+  refuse_scattered_options(o, set.label);
+  long W = 0, H = 0;
+  ProjectionRequest rq = projection_request(o, r, set, fr, &W, &H);
+  rq.inputs = set.bands;
+  std::vector<Projection> levels = project_pyramid(rq);
+  std::vector<Formed> formed(levels.size());
+  const auto sizes = pyramid_sizes(W, H);
+  for (std::size_t j = 0; j < levels.size(); ++j) {
+    Formed& f = formed[j];
+    static_cast<Projection&>(f) = std::move(levels[j]);
+    f.width = sizes[j].first;
+    f.height = sizes[j].second;
+    if (j == 0 && f.nonfinite.count)
+      f.warnings.push_back("replaced " + std::to_string(f.nonfinite.count) +
+                           " non-finite samples with 0; first: " + f.nonfinite.where);
+    f.display = r.display ? *r.display
+                          : (f.coefficients.min_error ? Display::antialiased_2x2() : Display::centred());
+    if (!fr.final_image) continue;
+    if (fr.interrupt) fr.interrupt();
+    const auto t = Clock::now();
+    f.final = final_image(f.coefficients, f.display, f.width, f.height, r.clamp,
+                          f.local_range.get(), r.threads);
+    f.resample_seconds = seconds_since(t);
+    f.local_range.reset();
+    if (!fr.keep_coefficients) Buffer<double>().swap(f.coefficients.c.data);
+  }
+  return formed;
 }
 
 namespace {

@@ -282,6 +282,17 @@ StagedFile stage_image(const std::string& path, const Image& image,
                        const Metadata& metadata = {}, int alpha_channel = -1,
                        const WriteOptions& options = {});
 
+// A tiled, MIP-mapped OpenEXR (as maketx writes textures: tiles of
+// tile_size, OpenEXR's MIPMAP_LEVELS with sizes rounded down,
+// "textureformat" "Plain Texture"), levels[j] its level j, in half or float
+// (linear): written to a staged file beside `path` and read back (every
+// level, of its size) before the caller commits. The levels' sizes must be
+// OpenEXR's for level 0's (sis/pyramid.h's pyramid_sizes). Throws
+// OutputError naming the file.
+StagedFile stage_mip_image(const std::string& path, const std::vector<Image>& levels,
+                           const std::vector<std::string>& channel_names, const Metadata& metadata,
+                           int alpha_channel, SampleFormat format, int tile_size = 64);
+
 // The sample type an output gets unless one is asked: float formats (EXR,
 // Radiance HDR, FITS, Zfile, PFM) float, or half where every input stores
 // half and the format holds it; the others integer, 16-bit where the input's

@@ -107,6 +107,15 @@ Formed form(const Settings& settings, const Resolved& resolved, InputSet inputs,
 Formed form(const Settings& settings, const std::vector<ProjectionInput>& inputs,
             const FormRequest& request = {});
 
+// A pyramid's levels (sis/pyramid.h) as siproject --mip forms them:
+// level 0 the frame form() gives, every level projected from one reading
+// of the inputs onto the space at its own frame and displayed at its size
+// by the display (element j: level j). Refused (RequestError naming
+// --mip): a coefficient file, partial files, scattered samples and the
+// hexagonal lattice.
+std::vector<Formed> form_pyramid(const Settings& settings, const Resolved& resolved, InputSet inputs,
+                                 const FormRequest& request = {});
+
 // Projects scattered samples (docs/design.md section 11) onto the Cartesian
 // space of the frame --size gives (width and height in pixels; --factor,
 // --scale, --lattice hex and --clamp local are refused) by the rule, then
