@@ -334,6 +334,7 @@ def derive(meta, rows):
         if r and r.get("render_trace_s") is not None:
             fixed.append(r["render_s"] - r["render_trace_s"])
     out["povray_fixed_s"] = sum(fixed) / len(fixed) if fixed else None
+    out["floors"] = floors(meta, rows, out)
     out["findings"] = findings(meta, rows, out)
     return out
 
@@ -352,118 +353,106 @@ def rank(values):
     return r
 
 
-def findings(meta, rows, d):
-    """Plain sentences with the numbers: what the measurements say."""
-    out = []
+def floors(meta, rows, d):
+    """Per scene: POV-Ray's deepest antialiasing as a continuous image (box f_app) against the
+    box at the largest factor, and the first (factor, method) of ours below it."""
     fmax = d["max_factor"]
-    cut = meta["cutoffs"]
-    # 1. High-pass ordering.
-    for c in cut:
-        agg = next((x for x in d["hp_checks"] if x["cutoff"] == c and x["where"].startswith("mean")), None)
-        per = [x for x in d["hp_checks"] if x["cutoff"] == c and not x["where"].startswith("mean")]
-        if agg and "order" in agg:
-            hp = {e["method"]: e[f"ldr_mean@{c:g}"] for e in d["hp"]}
-            order = " > ".join(f"{m} {100 * hp[m]:.2f}" for m in agg["order"])
-            n_top = sum(1 for x in per if x.get("me_tent_highest"))
-            n_low = sum(1 for x in per if x.get("conventional_lowest"))
-            n_mid = sum(1 for x in per if x.get("aa_between"))
-            out.append(
-                f"High-pass share above {c:g} cycles/pixel (factor {fmax:g}, mean of {', '.join(d['ldr_scenes'])}): "
-                f"{order} %. Seed's findings: min-error tent highest: {yes(agg.get('me_tent_highest'))} "
-                f"({n_top} of {len(per)} scenes); a conventional filter lowest: {yes(agg.get('conventional_lowest'))} "
-                f"(lowest: {agg.get('lowest')}; {n_low} of {len(per)} scenes); off-centre 2x2 between "
-                f"conventional tent/Mitchell and its centred method: {yes(agg.get('aa_between'))} "
-                f"({n_mid} of {len(per)} scenes). Rank correlation with the seed's table: "
-                f"{agg.get('spearman', float('nan')):.2f}. (The values are not the seed's: other scenes, "
-                f"resolution and cutoff; only the order compares.)")
-    # 2. Equal rays.
-    for s in meta["scenes"]:
-        es = sorted([e for e in d["equal_rays"] if e["scene"] == s], key=lambda e: e["factor"])
-        if not es:
-            continue
-        parts = ", ".join(f"f{e['factor']:g} {e['ratio']:.2f}" for e in es if e["ratio"] is not None)
-        k = d["crossover"].get(s)
-        if k is None:
-            verdict = "min-error does not win at the largest factors"
-        elif k == es[0]["factor"]:
-            verdict = "min-error has the lower error at every factor"
-        else:
-            verdict = f"min-error has the lower error from factor {k:g} on"
-        out.append(f"{s}: continuous L2 error at equal rays, best min-error / best conventional: {parts}; {verdict}.")
-    # 2b. The displayed image against the reference's pixel averages (the box's own target).
-    parts = []
-    for s in meta["scenes"]:
-        rs = [r for r in rows_of(rows, scene=s, factor=fmax) if r["rms"] is not None]
-        if rs:
-            lo, hi = min(rs, key=lambda r: r["rms"]), max(rs, key=lambda r: r["rms"])
-            parts.append(f"{s} lowest {lo['method']} {fmt(lo['rms'], 3)}, highest {hi['method']} {fmt(hi['rms'], 3)}")
-    if parts:
-        out.append(f"Displayed image against the reference pixel averages (RMS, factor {fmax:g}): " + "; ".join(parts)
-                   + ". Pixel averages are what box filtering converges to; the centred min-error displays sample "
-                   "f_app at pixel centres and keep their sharper look, so this measure ranks them low even where "
-                   "their f_app is the most accurate.")
-    # 3. Baselines: the displayed image (what POV-Ray's antialiasing is for), then the L2 floor.
-    for s in meta["scenes"]:
-        bs = [b for b in d["baselines"] if b["scene"] == s]
-        if not bs:
-            continue
-        bits = []
-        for b in bs:
-            head = f"{b['label'] or b['baseline']} ({b['rays_per_pixel']:.0f} rays/px, {b['time_s']:.2f} s, RMS {fmt(b['rms'], 3)})"
-            if b.get("cheapest_rms_method"):
-                bits.append(f"{head}: {b['cheapest_rms_method']} f{b['cheapest_rms_factor']:g} "
-                            f"{b['cheapest_rms_time_s']:.2f} s")
-            else:
-                bits.append(f"{head}: none measured")
-        out.append(f"{s}, POV-Ray's antialiasing against the cheapest (method, factor) whose displayed image is as "
-                   f"close to the reference pixel averages (display RMS): " + "; ".join(bits) + ".")
-    floors = []
+    out = []
     for s in meta["scenes"]:
         bs = sorted([b for b in d["baselines"] if b["scene"] == s and b["l2"] is not None],
                     key=lambda b: -(b["rays_per_pixel"] or 0))
         box = one(rows, scene=s, method="box", factor=fmax)
-        if bs and box and box["l2"] is not None:
-            below = [r for r in rows_of(rows, scene=s, kind="method") if r["method"] != "box"
-                     and is_centred(meta, r["method"]) and r["l2"] is not None and r["l2"] < bs[0]["l2"]]
-            first = min(below, key=lambda r: (r["factor"], r["l2"])) if below else None
-            floors.append(f"{s}: {fmt(bs[0]['l2'], 3)} with {bs[0]['label']}, box f{fmax:g} {fmt(box['l2'], 3)}, "
-                          + (f"first passed by {first['method']} at factor {first['factor']:g} "
-                             f"({fmt(first['l2'], 3)})" if first else "passed by no other method"))
-    if floors:
-        out.append("As a continuous image, POV-Ray's antialiased pixels are piecewise constant (box f_app): their "
-                   "L2 error stops at the box's floor however many rays they take, and a smoother f_app from "
-                   "fewer rays does better (" + "; ".join(floors) + ").")
-    # Projection cost against render cost.
-    shares = []
-    for m in meta["methods"]:
-        rs = [r for r in rows if r["method"] == m and r["factor"] == fmax and r["render_s"]]
+        if not bs or not box or box["l2"] is None:
+            continue
+        below = [r for r in rows_of(rows, scene=s, kind="method") if r["method"] != "box"
+                 and is_centred(meta, r["method"]) and r["l2"] is not None and r["l2"] < bs[0]["l2"]]
+        first = min(below, key=lambda r: (r["factor"], r["l2"])) if below else None
+        out.append({"scene": s, "baseline": bs[0]["label"], "rays_per_pixel": bs[0]["rays_per_pixel"],
+                    "l2": bs[0]["l2"], "box_l2": box["l2"],
+                    "first_method": first["method"] if first else None,
+                    "first_factor": first["factor"] if first else None,
+                    "first_l2": first["l2"] if first else None})
+    return out
+
+
+def findings(meta, rows, d):
+    """A few sentences of conclusions, every number computed from the rows; the
+    per-scene numbers are in the tables."""
+    out = []
+    fmax = d["max_factor"]
+    scenes = meta["scenes"]
+    # 1. Accuracy at equal rays.
+    cross = d["crossover"]
+    at_max = {e["scene"]: e["ratio"] for e in d["equal_rays"] if e["factor"] == fmax and e["ratio"] is not None}
+    if at_max:
+        first = min(meta["factors"])
+        winners = [s for s in scenes if cross.get(s) is not None]
+        froms = ", ".join(f"{s} from factor {cross[s]:g}" if cross[s] != first else f"{s} at every factor"
+                          for s in winners)
+        lo, hi = min(at_max.values()), max(at_max.values())
+        out.append(f"At equal rays min-error's f_app has the lower continuous L2 error than the best conventional "
+                   f"filter in {len(winners)} of {len(scenes)} scenes from some factor on ({froms}); at factor "
+                   f"{fmax:g} its error is {lo:.2f} to {hi:.2f} times the conventional one's "
+                   f"(lowest: {min(at_max, key=at_max.get)}).")
+    # 2. The seed's high-pass order.
+    parts = []
+    for c in meta["cutoffs"]:
+        agg = next((x for x in d["hp_checks"] if x["cutoff"] == c and x["where"].startswith("mean")), None)
+        per = [x for x in d["hp_checks"] if x["cutoff"] == c and not x["where"].startswith("mean")]
+        if agg and "spearman" in agg:
+            parts.append(f"above {c:g} cycles/pixel min-error tent is highest in "
+                         f"{sum(1 for x in per if x.get('me_tent_highest'))} of {len(per)} scenes, a conventional "
+                         f"filter lowest in {sum(1 for x in per if x.get('conventional_lowest'))}, the 2x2 displays "
+                         f"between in {sum(1 for x in per if x.get('aa_between'))} (rank correlation of the mean "
+                         f"with the seed's table {agg['spearman']:.2f})")
+    if parts:
+        out.append("The high-pass shares keep the seed's order: " + "; ".join(parts) + ".")
+    # 3. The displayed image against pixel averages.
+    low = {}
+    for s in scenes:
+        rs = [r for r in rows_of(rows, scene=s, factor=fmax) if r["rms"] is not None]
         if rs:
-            shares.append(f"{m} {100 * sum(r['project_s'] / r['render_s'] for r in rs) / len(rs):.1f} %")
+            low.setdefault(min(rs, key=lambda r: r["rms"])["method"], []).append(s)
+    if low:
+        top = max(low, key=lambda m: len(low[m]))
+        out.append(f"Against the reference's pixel averages (display RMS, factor {fmax:g}) {top} is closest in "
+                   f"{len(low[top])} of {len(scenes)} scenes: that measure is the box's own target and ranks the "
+                   f"sharper centred displays low even where their f_app is the most accurate.")
+    # 4. POV-Ray's antialiasing.
+    bs = d["baselines"]
+    if bs:
+        ratios = [b["time_ratio_rms"] for b in bs if b.get("cheapest_rms_method") and b.get("time_ratio_rms")]
+        none = [b for b in bs if not b.get("cheapest_rms_method")]
+        fl = floors(meta, rows, d)
+        passed1 = [x for x in fl if x["first_factor"] == min(meta["factors"])]
+        text = (f"POV-Ray's antialiasing: for {len(ratios)} of {len(bs)} (scene, setting) pairs a (method, factor) "
+                f"here gives a displayed image as close to the reference")
+        if ratios:
+            text += (f" in {min(ratios):.2f} to {max(ratios):.2f} times POV-Ray's time (median "
+                     f"{float(np.median(ratios)):.2f})")
+        if none:
+            text += f"; for {len(none)} none measured is as close ({', '.join(sorted({b['label'] for b in none}))})"
+        text += "."
+        if fl:
+            text += (f" As continuous images its pixels are piecewise constant, so their L2 error stops at the "
+                     f"box's floor, and a smoother f_app at factor {min(meta['factors']):g} is already below it in "
+                     f"{len(passed1)} of {len(fl)} scenes.")
+        out.append(text)
+    # 5. Cost.
+    shares = [r["project_s"] / r["render_s"] for r in rows
+              if r["kind"] == "method" and r["factor"] == fmax and r["render_s"]]
     if shares:
-        out.append(f"Projection time as a share of render time at factor {fmax:g} (mean over scenes): "
-                   + ", ".join(shares) + ".")
-    # 4. Overshoot.
-    fshow = meta["show_factor"]
-    for s in meta["scenes"]:
-        ov = {o["method"]: o for o in d["overshoot"] if o["scene"] == s}
-        parts = [f"{m} {fmt(o['max_overshoot'], 3)}/{fmt(o['max_undershoot'], 3)}, {o['negative_pixels']} negative"
-                 for m, o in ov.items() if (o["max_overshoot"] or 0) > 0 or (o["max_undershoot"] or 0) > 0
-                 or (o["negative_pixels"] or 0) > 0]
-        if parts:
-            out.append(f"{s}, overshoot/undershoot beyond the local input range at factor {fshow:g} "
-                       f"(largest, linear units) and negative pixels: " + "; ".join(parts) + ".")
-        else:
-            out.append(f"{s}: no method leaves the local input range at factor {fshow:g}.")
-    # 5. Zone plate check.
+        t = f"The projection costs {100 * float(np.mean(shares)):.1f} % of the render's time at factor {fmax:g} (mean over methods and scenes)"
+        if d["povray_fixed_s"] is not None:
+            t += f"; POV-Ray's start-up and parse, about {d['povray_fixed_s']:.2f} s a render, are in every time"
+        out.append(t + ".")
+    # 6. The reference.
     if d["zoneplate_check"]:
         worst = max(abs(z["l2_reference_render"] - z["l2_closed_form"]) / z["l2_closed_form"]
                     for z in d["zoneplate_check"] if z["l2_closed_form"])
-        out.append(f"Zone plate: the continuous L2 error measured against the reference render (factor "
-                   f"{meta['ref_factor']:g}) differs from the closed-form error by at most {100 * worst:.2g} % "
-                   f"(factor {fshow:g}, every centred method): the reference render is an adequate truth.")
-    if d["povray_fixed_s"] is not None:
-        out.append(f"POV-Ray's fixed cost (start-up and parse: wall time minus trace time of the factor-1 "
-                   f"renders) is about {d['povray_fixed_s']:.2f} s per render, included in every time.")
+        out.append(f"The reference render is an adequate truth: on the zone plate the error against it differs "
+                   f"from the closed form's by at most {100 * worst:.2g} % (factor {meta['show_factor']:g}, every "
+                   f"centred method).")
     return out
 
 
@@ -734,29 +723,8 @@ def build_html(meta, rows, d, charts, scene_cards, files):
         f"for the zone plate its closed form (ZP_K = {m['zp_k']:g}, {m['zp_samples_per_pixel']} points per "
         f"pixel and axis). Border band left out of every error: {m['border']} output pixels. "
         f"{esc(m['povray'])}; {m['nproc']} cores; made {esc(m['date'])}.</p>")
-    H.append(
-        "<p class='note'><b>Measures.</b> <i>Continuous L2 error</i>: RMS of f_app &minus; f over the reference "
-        "grid (simetrics --coeffs --truth / --zoneplate), where f_app = sum c[n] phi(x &minus; x_n) for min-error "
-        "and f_app = sum p[n] FILTER(x &minus; x_n) for the conventional filters (box: piecewise constant); the "
-        "2x2 displays share f_app with their centred method (same coefficients), so they share its continuous "
-        "error. POV-Ray's antialiased image is taken as piecewise constant (box f_app). <i>Display RMS / "
-        "PSNR</i>: the displayed image against the reference's pixel averages (peak 1). <i>High-pass share</i>: "
-        "DFT energy of the displayed luminance, mean removed, above the cutoff in cycles/pixel (whole image). "
-        "<i>Overshoot</i>: how far the display leaves [min, max] of the input samples under each pixel and one "
-        "pixel around it (the method's own render; for POV-Ray's antialiasing the reference render). "
-        "<i>Time</i>: POV-Ray's wall time as scripts/render.sh records it (start-up and parse included; smallest of "
-        f"{m['repeats']} runs for renders under {m['repeat_below_s']:g} s) plus the projection's (the render read, "
-        f"projected and resampled by the engine, in process; smallest of {m['repeats']} runs); POV-Ray's antialiasing: its render alone. POV-Ray baselines: +A0.0 "
-        "(threshold 0: every pixel supersampled) with +AM1 (an n x n grid plus the centre ray, n = +R) or +AM2 "
-        "(recursive subdivision from the pixel corners: a (2<sup>R&minus;1</sup>+1)<sup>2</sup> grid per pixel), "
-        "-J; rays per pixel from POV-Ray's own statistics.</p>")
     H.append("<p>Numbers: " + " &middot; ".join(f"<a href='{esc(f)}'>{esc(f)}</a>" for f in files
                                                  if f != "index.html") + "</p>")
-
-    H.append("<h2 id='findings'>Findings</h2><ul class='findings'>")
-    for f in d["findings"]:
-        H.append(f"<li>{esc(f)}</li>")
-    H.append("</ul>")
 
     H.append("<h2 id='charts'>Error against time</h2>")
     H.append(f"<p class='note'>Log-log; one line per method, its points the factors "
@@ -786,17 +754,6 @@ def build_html(meta, rows, d, charts, scene_cards, files):
                 classes.setdefault(max(vals, key=lambda v: v[1])[0], {})[j + 1] = "worst"
         H.append(table_html(["method"] + [esc(s) for s in m["scenes"]], body, classes))
 
-    H.append("<h3>best min-error against best conventional, every factor</h3>")
-    body = []
-    for e in d["equal_rays"]:
-        body.append([esc(e["scene"]), f"{e['factor']:g}", f"{e['rays_per_pixel']:g}",
-                     f"{esc(e['best_min_error'])} {fmt(e['min_error_l2'])}",
-                     f"{esc(e['best_conventional'])} {fmt(e['conventional_l2'])}",
-                     fmt(e["ratio"], 3), esc(e["winner"])])
-    H.append(table_html(["scene", "factor", "rays/px", "best min-error", "best conventional",
-                         "ratio", "lower error"], body))
-    H.append("<p class='note'>Data: <a href='equal-rays.csv'>equal-rays.csv</a>.</p>")
-
     # High-pass table.
     H.append("<h2 id='highpass'>High-pass energy share beside the seed's table</h2>")
     cols = ["method", "seed (%)"] + [f"{s} &gt;{c:g}" for c in m["cutoffs"] for s in m["scenes"]] + \
@@ -812,6 +769,21 @@ def build_html(meta, rows, d, charts, scene_cards, files):
              "compare the ordering, not the values. Data: <a href='hp.csv'>hp.csv</a>.</p>")
     H.append(table_html(cols, body))
     H.append(f"<img class='chart' src='{charts['hp']}' alt='high-pass shares beside the seed'>")
+
+    H.append("<h2 id='findings'>Conclusions</h2><ul class='findings'>")
+    for f in d["findings"]:
+        H.append(f"<li>{esc(f)}</li>")
+    H.append("</ul>")
+
+    # The per-scene numbers.
+    H.append("<h2 id='per-scene'>Per scene</h2>")
+    csvs = {"Min-error against conventional at equal rays": "equal-rays.csv",
+            "POV-Ray's antialiasing against the cheapest method as close": "baseline.csv"}
+    for title, note, header, body in scene_tables(meta, rows, d):
+        data = f" Data: <a href='{csvs[title]}'>{csvs[title]}</a>." if title in csvs else ""
+        H.append(f"<h3>{esc(title)}</h3><p class='note'>{esc(note)}{data}</p>")
+        H.append(table_html([esc(h) for h in header], [[esc(c) for c in r] for r in body]))
+    H.append("<h3>High-pass order against the seed's findings</h3>")
     body = []
     for x in d["hp_checks"]:
         body.append([esc(x["where"]), f"{x['cutoff']:g}", yes(x.get("me_tent_highest")),
@@ -819,34 +791,6 @@ def build_html(meta, rows, d, charts, scene_cards, files):
                      fmt(x.get("spearman"), 2), " &gt; ".join(esc(o) for o in x.get("order", []))])
     H.append(table_html(["where", "cutoff", "min-error tent highest", "conventional lowest",
                          "2x2 in between", "rank corr. with seed", "our order"], body))
-
-    # Baselines.
-    H.append("<h2 id='baseline'>POV-Ray's own antialiasing</h2>")
-    body = []
-    for b in d["baselines"]:
-        c = b.get("cheapest_l2_method")
-        cr = b.get("cheapest_rms_method")
-        body.append([esc(b["scene"]), esc(b["label"] or b["baseline"]), fmt(b["rays_per_pixel"], 3),
-                     fmt(b["time_s"], 3), fmt(b["l2"]), fmt(b["rms"]),
-                     f"{esc(c)} f{b['cheapest_l2_factor']:g}: {fmt(b['cheapest_l2_time_s'], 3)} s" if c else "none",
-                     f"{esc(cr)} f{b['cheapest_rms_factor']:g}: {fmt(b['cheapest_rms_time_s'], 3)} s" if cr else "none"])
-    H.append("<p class='note'>Each baseline's rays per pixel (POV-Ray's statistics), time, continuous L2 error "
-             "(piecewise constant) and display RMS, and the cheapest of our (method, factor) pairs with an equal or "
-             "lower error. Data: <a href='baseline.csv'>baseline.csv</a>.</p>")
-    H.append(table_html(["scene", "baseline", "rays/px", "time (s)", "L2", "display RMS",
-                         "cheapest method, L2 &le;", "cheapest method, RMS &le;"], body))
-
-    # Overshoot.
-    H.append("<h2 id='overshoot'>Overshoot and negative pixels</h2>")
-    body = []
-    for o in d["overshoot"]:
-        body.append([esc(o["scene"]), esc(o["method"]), fmt(o["max_overshoot"], 3), fmt(o["max_undershoot"], 3),
-                     fmt(o["pixels_out_of_range"]), fmt(o["negative_pixels"]), fmt(o["pixels"])])
-    H.append(f"<p class='note'>Factor {m['show_factor']:g}, inside the border band: largest excursion above the "
-             "local maximum and below the local minimum of the input samples (linear units), pixels out of range "
-             "(any channel), negative pixels (any channel), pixels examined.</p>")
-    H.append(table_html(["scene", "method", "max over", "max under", "pixels out of range",
-                         "negative pixels", "pixels"], body))
 
     # Scenes.
     H.append("<h2 id='scenes'>Scenes</h2>")
@@ -894,6 +838,23 @@ def build_html(meta, rows, d, charts, scene_cards, files):
                              "RMS", "PSNR"] + [f"hp &gt;{c:g} (%)" for c in m["cutoffs"]] +
                             ["over", "under", "neg. px"], body))
         H.append("</details>")
+    H.append("<h2 id='measures'>How it is measured</h2>")
+    H.append(
+        "<p class='note'><b>Measures.</b> <i>Continuous L2 error</i>: RMS of f_app &minus; f over the reference "
+        "grid (simetrics --coeffs --truth / --zoneplate), where f_app = sum c[n] phi(x &minus; x_n) for min-error "
+        "and f_app = sum p[n] FILTER(x &minus; x_n) for the conventional filters (box: piecewise constant); the "
+        "2x2 displays share f_app with their centred method (same coefficients), so they share its continuous "
+        "error. POV-Ray's antialiased image is taken as piecewise constant (box f_app). <i>Display RMS / "
+        "PSNR</i>: the displayed image against the reference's pixel averages (peak 1). <i>High-pass share</i>: "
+        "DFT energy of the displayed luminance, mean removed, above the cutoff in cycles/pixel (whole image). "
+        "<i>Overshoot</i>: how far the display leaves [min, max] of the input samples under each pixel and one "
+        "pixel around it (the method's own render; for POV-Ray's antialiasing the reference render). "
+        "<i>Time</i>: POV-Ray's wall time as scripts/render.sh records it (start-up and parse included; smallest of "
+        f"{m['repeats']} runs for renders under {m['repeat_below_s']:g} s) plus the projection's (the render read, "
+        f"projected and resampled by the engine, in process; smallest of {m['repeats']} runs); POV-Ray's antialiasing: its render alone. POV-Ray baselines: +A0.0 "
+        "(threshold 0: every pixel supersampled) with +AM1 (an n x n grid plus the centre ray, n = +R) or +AM2 "
+        "(recursive subdivision from the pixel corners: a (2<sup>R&minus;1</sup>+1)<sup>2</sup> grid per pixel), "
+        "-J; rays per pixel from POV-Ray's own statistics.</p>")
     H.append(f"<p class='note'>Made by <code>make compare</code> (scripts/compare.py, scripts/report_compare.py) in "
              f"{m['pipeline_s']:.0f} s; steps made this run: {esc(json.dumps(m['steps']))}; the Python module "
              f"{esc(m['tools'].get('module_sha'))}.</p>")
@@ -903,7 +864,71 @@ def build_html(meta, rows, d, charts, scene_cards, files):
 
 # ---- README text ---------------------------------------------------------------------
 
-def readme_md(meta, d, link_prefix):
+def scene_tables(meta, rows, d):
+    """The per-scene numbers as (title, note, header, body) tables of plain text cells."""
+    m = meta
+    fmax, fshow = d["max_factor"], m["show_factor"]
+    out = []
+    fs = sorted({e["factor"] for e in d["equal_rays"]})
+    body = []
+    for s in m["scenes"]:
+        by = {e["factor"]: e for e in d["equal_rays"] if e["scene"] == s}
+        k = d["crossover"].get(s)
+        body.append([s] + [fmt(by[f]["ratio"], 3) if f in by else "n/a" for f in fs] +
+                     ["never" if k is None else f"{k:g}"])
+    out.append(("Min-error against conventional at equal rays",
+                "Continuous L2 error of the best centred min-error method over the best conventional filter's, "
+                "per factor; below 1: min-error is more accurate. Last column: the factor from which min-error "
+                "stays lower.",
+                ["scene"] + [f"f{f:g}" for f in fs] + ["lower from"], body))
+    body = []
+    for meth in m["methods"]:
+        body.append([meth] + [fmt((one(rows, scene=s, method=meth, factor=fmax) or {}).get("rms"), 3)
+                              for s in m["scenes"]])
+    out.append((f"Displayed image against the reference's pixel averages (RMS, factor {fmax:g})",
+                "Pixel averages are what box filtering converges to; the centred min-error displays sample f_app "
+                "at pixel centres.", ["method"] + list(m["scenes"]), body))
+    body = []
+    for b in d["baselines"]:
+        c = b.get("cheapest_rms_method")
+        body.append([b["scene"], b["label"] or b["baseline"], fmt(b["rays_per_pixel"], 3), fmt(b["time_s"], 3),
+                     fmt(b["rms"], 3), f"{c} f{b['cheapest_rms_factor']:g}" if c else "none measured",
+                     fmt(b.get("cheapest_rms_time_s"), 3) if c else "", fmt(b.get("time_ratio_rms"), 3) if c else ""])
+    out.append(("POV-Ray's antialiasing against the cheapest method as close",
+                "Each setting's rays per pixel (POV-Ray's statistics), time and display RMS, and the cheapest "
+                "(method, factor) here whose display RMS is as low.",
+                ["scene", "POV-Ray", "rays/px", "time (s)", "display RMS", "cheapest as close", "its time (s)",
+                 "time ratio"], body))
+    body = [[x["scene"], f"{x['baseline']} ({x['rays_per_pixel']:.0f} rays/px)", fmt(x["l2"], 3),
+             fmt(x["box_l2"], 3),
+             f"{x['first_method']} f{x['first_factor']:g} ({fmt(x['first_l2'], 3)})" if x["first_method"] else "none"]
+            for x in d["floors"]]
+    out.append(("POV-Ray's antialiasing as a continuous image",
+                f"Its deepest setting's continuous L2 error (piecewise constant), the box's at factor {fmax:g}, "
+                "and the first (lowest factor) centred method below it.",
+                ["scene", "POV-Ray", "L2", f"box f{fmax:g} L2", "first below"], body))
+    ov = {(o["scene"], o["method"]): o for o in d["overshoot"]}
+    body = []
+    for meth in m["methods"]:
+        cells = []
+        for s in m["scenes"]:
+            o = ov.get((s, meth))
+            cells.append(f"{fmt(o['max_overshoot'], 3)} / {fmt(o['max_undershoot'], 3)} ({fmt(o['negative_pixels'])})"
+                         if o else "n/a")
+        body.append([meth] + cells)
+    out.append((f"Overshoot and negative pixels (factor {fshow:g})",
+                "Largest excursion above the local maximum / below the local minimum of the input samples "
+                "(linear units) and, in brackets, the negative pixels, inside the border band.",
+                ["method"] + list(m["scenes"]), body))
+    return out
+
+
+def md_table(header, body):
+    return ["| " + " | ".join(header) + " |", "| --- |" + " ---: |" * (len(header) - 1)] + \
+           ["| " + " | ".join(str(c) for c in r) + " |" for r in body]
+
+
+def readme_md(meta, d, rows, link_prefix):
     m = meta
     f = d["max_factor"]
     L = ["## Results", ""]
@@ -940,7 +965,6 @@ def readme_md(meta, d, link_prefix):
             L.append(f"| {label} ({top:.0f} rays/px) | " +
                      " | ".join(fmt(byscene[s]["l2"], 3) if s in byscene else "n/a" for s in m["scenes"]) + " |")
     L.append("")
-    c0 = m["cutoffs"][0]
     L.append(f"High-pass energy share of the displayed image (%), factor {f:g}, mean of "
              f"{', '.join(d['ldr_scenes'])}, beside the seed's table (docs/design.md section 4; its cutoff unknown):")
     L.append("")
@@ -950,10 +974,14 @@ def readme_md(meta, d, link_prefix):
         L.append(f"| {SEED_LABEL.get(e['method'], e['method'])} | {fmt(e['seed_percent'])} | " +
                  " | ".join(pct(e[f"ldr_mean@{c:g}"]) for c in m["cutoffs"]) + " |")
     L.append("")
-    L.append("What the measurements say:")
+    L.append("Conclusions:")
     L.append("")
     for x in d["findings"]:
         L.append(f"- {x}")
+    L.append("")
+    L.append("### Per scene")
+    for title, note, header, body in scene_tables(meta, rows, d):
+        L += ["", f"**{title}.** {note}", ""] + md_table(header, body)
     L.append("")
     return "\n".join(L)
 
@@ -1020,7 +1048,7 @@ def build(report, work, meta, rows):
         root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
         rp = os.path.abspath(report)
         prefix = (os.path.relpath(rp, root) + "/") if rp.startswith(root + os.sep) else ""
-        write(tmp, "README-results.md", readme_md(meta, d, prefix))
+        write(tmp, "README-results.md", readme_md(meta, d, rows, prefix))
         # So do the stability study (make stability) and the hexagonal
         # comparison (make compare-hex): linked when there.
         linked = files + [f"{sub}/index.html" for sub in ("stability", "hex")
