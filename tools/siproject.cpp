@@ -33,6 +33,33 @@ using namespace sis;
 
 namespace {
 
+// Half holds magnitudes up to 65504; beyond, a half file would hold
+// infinities. By default such an output is written as float instead; with
+// -d half (format_given) the samples are clamped there, and both are said.
+// True when samples were clamped (counted in `clamped`): the caller's range
+// is then out of date.
+constexpr float kHalfMax = 65504.0f;
+bool fit_half(SampleFormat& format, bool format_given, const RangeReport& after,
+              const std::vector<Image*>& images, bool quiet, long& clamped) {
+  if (format != SampleFormat::Half || !(after.max > kHalfMax || after.min < -kHalfMax)) return false;
+  if (!format_given) {
+    format = SampleFormat::Float;
+    if (!quiet)
+      std::fprintf(stderr,
+                   "siproject: warning: the output reaches %g, beyond half's largest value "
+                   "65504: written as float (-d half clamps instead)\n",
+                   std::max(after.max, -after.min));
+    return false;
+  }
+  for (Image* image : images)
+    for (float& v : image->data)
+      if (std::abs(v) > kHalfMax) v = std::copysign(kHalfMax, v), ++clamped;
+  if (!quiet)
+    std::fprintf(stderr, "siproject: warning: -d half: %ld samples beyond +-65504 clamped there\n",
+                 clamped);
+  return true;
+}
+
 using sis::cli::kExitUsage;
 using sis::cli::kExitInput;
 using sis::cli::kExitOutput;
@@ -173,26 +200,12 @@ int write_mip_of(const Options& o, const Resolved& r, InputSet set, SampleFormat
     prefilter += f.prefilter_seconds;
     resample += f.resample_seconds;
   }
-  constexpr float kHalfMax = 65504.0f;
+  std::vector<Image*> level_images;
+  for (Formed& f : levels) level_images.push_back(&f.final.image);
   long half_clamped = 0;
-  if (out_format == SampleFormat::Half && (after.max > kHalfMax || after.min < -kHalfMax)) {
-    if (!format_given) {
-      out_format = SampleFormat::Float;
-      if (!o.quiet)
-        std::fprintf(stderr,
-                     "siproject: warning: the output reaches %g, beyond half's largest value "
-                     "65504: written as float (-d half clamps instead)\n",
-                     std::max(after.max, -after.min));
-    } else {
-      for (Formed& f : levels)
-        for (float& v : f.final.image.data)
-          if (std::abs(v) > kHalfMax) v = std::copysign(kHalfMax, v), ++half_clamped;
-      after.min = std::max(after.min, -double(kHalfMax));
-      after.max = std::min(after.max, double(kHalfMax));
-      if (!o.quiet)
-        std::fprintf(stderr, "siproject: warning: -d half: %ld samples beyond +-65504 clamped there\n",
-                     half_clamped);
-    }
+  if (fit_half(out_format, format_given, after, level_images, o.quiet, half_clamped)) {
+    after.min = std::max(after.min, -double(kHalfMax));
+    after.max = std::min(after.max, double(kHalfMax));
   }
   const Metadata md = {
       {"sis:method", k.min_error ? "min-error" : "conventional"},
@@ -373,30 +386,9 @@ int run(const Options& o) {
   const bool own_range = f.final.own_range;
   const RangeReport before = f.final.before;
   RangeReport after = f.final.after;
-  // Half holds magnitudes up to 65504; beyond, a half file would hold
-  // infinities. By default such an output is written as float instead; with
-  // -d half the samples are clamped there, and both are said.
-  constexpr float kHalfMax = 65504.0f;
   long half_clamped = 0;
-  if (out_format == SampleFormat::Half &&
-      (after.max > kHalfMax || after.min < -kHalfMax)) {
-    if (!data_format) {
-      out_format = SampleFormat::Float;
-      if (!o.quiet)
-        std::fprintf(stderr,
-                     "siproject: warning: the output reaches %g, beyond half's largest value "
-                     "65504: written as float (-d half clamps instead)\n",
-                     std::max(after.max, -after.min));
-    } else {
-      for (float& v : image.data)
-        if (std::abs(v) > kHalfMax) v = std::copysign(kHalfMax, v), ++half_clamped;
-      after = report_range(image, nullptr, threads);
-      if (!o.quiet)
-        std::fprintf(stderr,
-                     "siproject: warning: -d half: %ld samples beyond +-65504 clamped there\n",
-                     half_clamped);
-    }
-  }
+  if (fit_half(out_format, bool(data_format), after, {&image}, o.quiet, half_clamped))
+    after = report_range(image, nullptr, threads);
   const double t_resample = f.resample_seconds;
   f.local_range.reset();  // what is no longer needed goes before the output is written
 
