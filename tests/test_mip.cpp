@@ -165,7 +165,7 @@ TEST_F(Mip, BadRequestsAreRefusedAndLeaveNothing) {
   refused("-o " + path("t.png") + " --factor 2 --mip", "--mip: -o " + path("t.png"));
   refused("-o " + path("t.tif") + " --factor 2 --mip", "OpenEXR");
   refused("-o " + path("t.exr") + " --factor 2 --mip --lattice hex", "hexagonal");
-  refused("-o " + path("t.exr") + " --factor 2 --mip --coeffs " + path("k.exr"), "--coeffs");
+  refused("-o " + path("t.exr") + " --factor 2 --mip --coeffs " + path("k.png"), "--coeffs");
   refused("-o " + path("t.exr") + " --factor 2 --mip --compression piz", "--compression");
   refused("-o " + path("t.exr") + " --factor 2 --mip -d uint8", "-d");
   refused("-o " + path("t.exr") + " --scale 0.01 --mip", "--scale");  // a size with no level
@@ -175,8 +175,61 @@ TEST_F(Mip, BadRequestsAreRefusedAndLeaveNothing) {
   ASSERT_EQ(run(in + " -o " + path("a.exr") + " --factor 2 --coeffs " + k).status, 0);
   const Result r = run(k + " -o " + path("t.exr") + " --mip");
   EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find("coefficient file"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("coefficient file of one level"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(path("t.exr")));
+  // a pyramid's coefficient file: its levels' sizes are recorded
+  const std::string kp = path("kp.exr");
+  ASSERT_EQ(run(in + " -o " + path("b.exr") + " --factor 2 --mip --coeffs " + kp).status, 0);
+  const Result s = run(kp + " -o " + path("t.exr") + " --mip --size 4x3");
+  EXPECT_EQ(s.status, 2) << s.output;
+  EXPECT_NE(s.output.find("drop --factor, --scale and --size"), std::string::npos) << s.output;
+  EXPECT_FALSE(std::filesystem::exists(path("t.exr")));
+}
+
+TEST_F(Mip, APyramidsCoefficientFileHoldsEveryLevelsOwnCoefficients) {
+  const std::string in = render(37, 21, 4, 44);
+  const std::string tex = path("tex.exr"), kp = path("kp.exr");
+  ASSERT_EQ(run(in + " -o " + tex + " --factor 4 --mip -d float --coeffs " + kp).status, 0);
+  // OpenEXR's levels, of maketx's sizes, the coefficients as float
+  EXPECT_EQ(mip_levels(kp), mip_levels(tex));
+  const auto sizes = pyramid_sizes(37, 21);
+  for (std::size_t j = 0; j < sizes.size(); ++j) {
+    const auto [w, h] = sizes[j];
+    // level j: the coefficient file of the single run at its size, bit for bit
+    const std::string kj = path("k" + std::to_string(j) + ".exr");
+    ASSERT_EQ(run(in + " -o " + path("img.exr") + " --size " + std::to_string(w) + "x" +
+                  std::to_string(h) + " --coeffs " + kj).status, 0);
+    const Image mine = read_float(kp, int(j)), own = read_float(kj);
+    ASSERT_EQ(mine.data.size(), own.data.size()) << "level " << j;
+    EXPECT_EQ(std::memcmp(mine.data.data(), own.data.data(), own.data.size() * sizeof(float)), 0)
+        << "level " << j;
+    // read back as coefficients of level j's frame
+    ImageReader reader(kp);
+    EXPECT_EQ(coefficient_levels(reader), int(sizes.size()));
+    reader.select_level(int(j));
+    const Coefficients k = read_coefficients(reader);
+    EXPECT_EQ(k.image_width, double(w));
+    EXPECT_EQ(k.image_height, double(h));
+    EXPECT_EQ(k.c.width, w);
+  }
+  // evaluated again: the texture of the direct run, every level bit for bit
+  const std::string again = path("again.exr");
+  const Result r = run(kp + " -o " + again + " --mip -d float");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(mip_levels(again), mip_levels(tex));
+  for (std::size_t j = 0; j < sizes.size(); ++j) {
+    const Image a = read_float(again, int(j)), b = read_float(tex, int(j));
+    ASSERT_EQ(a.data.size(), b.data.size());
+    EXPECT_EQ(std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)), 0)
+        << "level " << j;
+  }
+  // as one coefficient file: level 0, at its frame
+  const std::string level0 = path("level0.exr"), direct = path("direct.exr");
+  ASSERT_EQ(run(kp + " -o " + level0 + " -d float").status, 0);
+  ASSERT_EQ(run(in + " -o " + direct + " --factor 4 -d float").status, 0);
+  const Image a = read_float(level0), b = read_float(direct);
+  ASSERT_EQ(a.data.size(), b.data.size());
+  EXPECT_EQ(std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)), 0);
 }
 
 }  // namespace

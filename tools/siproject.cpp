@@ -176,7 +176,9 @@ int write_mip_of(const Options& o, const Resolved& r, InputSet set, SampleFormat
   const long win = set.width, hin = set.height;
   const int C = set.channels;
   FormRequest fr;
-  Progress progress(!o.quiet, "reading and acquiring");
+  fr.keep_coefficients = !o.coeffs.empty();
+  fr.coefficient_file = !o.coeffs.empty();
+  Progress progress(!o.quiet && !set.coefficient_file, "reading and acquiring");
   fr.progress = [&](double f) { progress.update(f); };
   std::vector<Formed> levels = form_pyramid(o.settings, r, std::move(set), fr);
   for (const std::string& w : levels.front().warnings)
@@ -228,12 +230,20 @@ int write_mip_of(const Options& o, const Resolved& r, InputSet set, SampleFormat
       {"wrapmodes", k.boundary == Boundary::Periodic ? "periodic,periodic" : "mirror,mirror"},
       {"Software", "siproject"},
   };
+  const auto t = Clock::now();
+  // Both outputs are written whole before either replaces a file.
+  std::optional<StagedFile> coeffs_file;
+  if (!o.coeffs.empty()) {
+    std::vector<const Coefficients*> grids;
+    for (const Formed& f : levels) grids.push_back(&f.coefficients);
+    coeffs_file.emplace(stage_mip_coefficients(o.coeffs, grids));
+  }
   std::vector<Image> images;
   for (Formed& f : levels) images.push_back(std::move(f.final.image));
   const int alpha = levels.front().inputs.alpha;
   levels.clear();
-  const auto t = Clock::now();
   StagedFile file = stage_mip_image(o.output, images, names, md, alpha, out_format);
+  if (coeffs_file) coeffs_file->commit();
   file.commit();
   const double t_write = seconds_since(t);
   if (o.verbose) {
@@ -243,8 +253,8 @@ int write_mip_of(const Options& o, const Resolved& r, InputSet set, SampleFormat
                  "siproject: read+acquire %.3f s, prefilter %.3f s, resample %.3f s, write %.3f s, "
                  "total %.3f s\n",
                  win, hin, C, images.size(), images.front().width, images.front().height,
-                 k.min_error ? "min-error" : "conventional", generator_name(k).c_str(),
-                 md[2].second.c_str(), boundary_name(k.boundary).c_str(), r.threads, acquire,
+                 md[0].second.c_str(), md[1].second.c_str(), md[2].second.c_str(),
+                 md[3].second.c_str(), r.threads, acquire,
                  prefilter, resample, t_write, seconds_since(t_start));
     std::fprintf(stderr, "siproject: output range [%g, %g] over every level, %ld negative samples\n",
                  before.min, before.max, before.negative);
@@ -260,9 +270,6 @@ int run(const Options& o) {
       throw UsageError("--mip: -o " + o.output + ": a MIP-mapped texture is written as OpenEXR "
                        "(.exr), as maketx writes them");
     if (o.partial) throw UsageError("--mip and --partial exclude each other");
-    if (!o.coeffs.empty())
-      throw UsageError("--mip: --coeffs is not taken with --mip (a coefficient file holds one "
-                       "level); write the levels' coefficients by a run per level");
     if (!o.compression.empty() || o.quality)
       throw UsageError("--mip: the texture's tiles are zip-compressed, as maketx writes them; "
                        "--compression and --quality are not taken with --mip");

@@ -831,8 +831,10 @@ Projection merge(const std::vector<Partial>& parts, int threads, bool float_coef
 }
 
 Coefficients load_coefficients(const std::string& path, bool zero_nonfinite,
-                               NonFiniteReport* replaced, const FileSignature& expected) {
+                               NonFiniteReport* replaced, const FileSignature& expected,
+                               int level) {
   ImageReader file(path, expected);
+  file.select_level(level);
   const std::uint64_t stored = std::uint64_t(file.width()) * std::uint64_t(file.height());
   check_memory(projection_bytes(0, 0, file.channels(), stored + stored / 2, false, false, 1),
                "a coefficient grid of " + std::to_string(file.width()) + " x " +

@@ -28,6 +28,7 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <tuple>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -63,7 +64,8 @@ struct ImageReader::Impl {
   bool yc_alpha = false;
   std::vector<Imf::Rgba> yc_rows;
   bool luminance_chroma = false;
-  int levels = 0, parts = 0;  // of the file (level 0 of part 0 is read)
+  int levels = 0, parts = 0;  // of the file
+  int level = 0;              // of part 0, the one read (select_level)
   ImageSpec spec;
   std::string format;
   // Tiled files: the tile row last read whole (tile-row index, element
@@ -387,6 +389,25 @@ void ImageReader::release() {
 }
 
 int ImageReader::levels() const { return std::max(1, impl_->levels); }
+int ImageReader::level() const { return impl_->level; }
+
+void ImageReader::select_level(int level) {
+  if (level == impl_->level) return;
+  if (!impl_->in) {
+    if (impl_->luminance_chroma)
+      throw InputError(path_ + ": a luminance-chroma file has one level, not level " + std::to_string(level));
+    throw std::logic_error(path_ + ": select_level after release()");
+  }
+  ImageSpec spec;
+  if (level < 0 || level >= levels() || !impl_->in->seek_subimage(0, level, spec))
+    throw InputError(path_ + ": has no level " + std::to_string(level) + " (it has " +
+                     std::to_string(levels()) + ")");
+  if (spec.width < 1 || spec.height < 1 || spec.nchannels != impl_->spec.nchannels)
+    throw InputError(path_ + ": level " + std::to_string(level) + " is empty or has other channels");
+  impl_->spec = spec;
+  impl_->level = level;
+  impl_->cached_tile_row = -1;
+}
 int ImageReader::parts() const { return std::max(1, impl_->parts); }
 bool ImageReader::luminance_chroma() const { return impl_->luminance_chroma; }
 
@@ -612,7 +633,7 @@ void ImageReader::read(long y0, long y1, SampleFormat format, void* rows) {
   const TypeDesc asked = stored_as(s, type) ? TypeDesc::UNKNOWN : type;
   ImageInput& in = *impl_->in;
   if (s.tile_width <= 0) {
-    if (!in.read_scanlines(0, 0, s.y + y0, s.y + y1, s.z, 0, s.nchannels, asked, rows))
+    if (!in.read_scanlines(0, impl_->level, s.y + y0, s.y + y1, s.z, 0, s.nchannels, asked, rows))
       read_failed(path_, y0, y1, in);
     return;
   }
@@ -624,7 +645,7 @@ void ImageReader::read(long y0, long y1, SampleFormat format, void* rows) {
   const int elem = format == SampleFormat::Half ? 2 : 4;
   const std::size_t row_bytes = std::size_t(s.width) * s.nchannels * elem;
   auto tiles = [&](long a, long b, void* dst) {
-    if (!in.read_tiles(0, 0, s.x, s.x + s.width, s.y + a, s.y + b, s.z, s.z + 1, 0, s.nchannels,
+    if (!in.read_tiles(0, impl_->level, s.x, s.x + s.width, s.y + a, s.y + b, s.z, s.z + 1, 0, s.nchannels,
                        asked, dst))
       read_failed(path_, a, b, in);
   };
@@ -1499,15 +1520,9 @@ bool holds_coefficients(const std::string& path) {
   return out && out->format_name() == std::string("openexr");
 }
 
-StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
-                              const std::vector<std::string>& channel_names,
-                              const Metadata& extra) {
-  check_path(path, true);
-  if (!holds_coefficients(path))
-    throw OutputError(path + ": coefficient files are OpenEXR (.exr); this format cannot hold "
-                      "their metadata and signed float coefficients");
-  Image grid(k.c.width, k.c.height, k.c.channels);
-  for (std::size_t q = 0; q < grid.data.size(); ++q) grid.data[q] = static_cast<float>(k.c.data[q]);
+namespace {
+// A coefficient file's metadata: everything Coefficients holds.
+Metadata coefficient_metadata(const Coefficients& k, const Metadata& extra) {
   const auto num = metadata_number;
   // the space's own keys (lattice, storage, origin, matrix, generator, degree)
   Metadata md = visit_space(k, [&](auto space) { return space.metadata(k); });
@@ -1532,8 +1547,60 @@ StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
       if (kv.first == key) kv.second = value, replaced = true;
     if (!replaced) md.push_back({key, value});
   }
-  return stage_image(path, grid, channel_names.empty() ? k.channel_names : channel_names, md,
-                     k.alpha);
+  return md;
+}
+
+Image coefficient_grid(const Coefficients& k) {
+  Image grid(k.c.width, k.c.height, k.c.channels);
+  for (std::size_t q = 0; q < grid.data.size(); ++q) grid.data[q] = static_cast<float>(k.c.data[q]);
+  return grid;
+}
+
+void refuse_non_coefficient_format(const std::string& path) {
+  check_path(path, true);
+  if (!holds_coefficients(path))
+    throw OutputError(path + ": coefficient files are OpenEXR (.exr); this format cannot hold "
+                      "their metadata and signed float coefficients");
+}
+}  // namespace
+
+StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
+                              const std::vector<std::string>& channel_names,
+                              const Metadata& extra) {
+  refuse_non_coefficient_format(path);
+  return stage_image(path, coefficient_grid(k),
+                     channel_names.empty() ? k.channel_names : channel_names,
+                     coefficient_metadata(k, extra), k.alpha);
+}
+
+StagedFile stage_mip_coefficients(const std::string& path,
+                                  const std::vector<const Coefficients*>& levels) {
+  refuse_non_coefficient_format(path);
+  if (levels.empty()) throw OutputError(path + ": a pyramid's coefficient file needs a level");
+  const Coefficients& top = *levels.front();
+  std::string sizes;
+  for (const Coefficients* k : levels)
+    sizes += (sizes.empty() ? "" : " ") + metadata_number(k->image_width) + "x" +
+             metadata_number(k->image_height);
+  const Metadata frame_keys = {{"sis:image_width", ""}, {"sis:image_height", ""}};
+  const Metadata common = coefficient_metadata(top, frame_keys);
+  std::vector<Image> grids;
+  for (std::size_t j = 0; j < levels.size(); ++j) {
+    const Coefficients& k = *levels[j];
+    // one header for every level: each level's keys are level 0's but its frame
+    if (coefficient_metadata(k, frame_keys) != common || k.channel_names != top.channel_names)
+      throw OutputError(path + ": level " + std::to_string(j) + "'s coefficients are not of level "
+                        "0's space; one MIP-mapped file holds one space's levels");
+    grids.push_back(coefficient_grid(k));
+  }
+  Metadata md = coefficient_metadata(top, {});
+  md.push_back({"sis:mip_levels", std::to_string(levels.size())});
+  md.push_back({"sis:mip_sizes", sizes});
+  return stage_mip_image(path, grids, top.channel_names, md, top.alpha, SampleFormat::Float);
+}
+
+int coefficient_levels(const ImageReader& r) {
+  return r.attribute("sis:mip_sizes").empty() ? 1 : r.levels();
 }
 
 namespace {
@@ -1588,6 +1655,24 @@ Coefficients read_coefficients(ImageReader& r) {
     }
     k.image_width = numbers("sis:image_width", 1)[0];
     k.image_height = numbers("sis:image_height", 1)[0];
+    if (const std::string sizes = r.attribute("sis:mip_sizes"); !sizes.empty()) {
+      // a pyramid's file: the selected level's frame
+      std::istringstream s(sizes);
+      std::vector<std::pair<double, double>> frames;
+      for (std::string wh; s >> wh;) {
+        const auto x = wh.find('x');
+        double w = 0, h = 0;
+        if (x == std::string::npos) throw std::invalid_argument("sis:mip_sizes '" + sizes + "' is malformed");
+        std::istringstream(wh.substr(0, x)) >> w;
+        std::istringstream(wh.substr(x + 1)) >> h;
+        frames.push_back({w, h});
+      }
+      if (long(frames.size()) != r.levels() || r.attribute("sis:mip_levels") != std::to_string(r.levels()))
+        throw std::invalid_argument("sis:mip_sizes and sis:mip_levels name " +
+                                    std::to_string(frames.size()) + " levels; the file has " +
+                                    std::to_string(r.levels()));
+      std::tie(k.image_width, k.image_height) = frames[std::size_t(r.level())];
+    }
     if (!(k.image_width >= 1 && k.image_height >= 1 && k.image_width <= kMaxFrame &&
           k.image_height <= kMaxFrame))
       throw std::invalid_argument("sis:image_width and sis:image_height must lie in [1, " +

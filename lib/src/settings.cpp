@@ -235,6 +235,49 @@ Partial form_partial(const Settings& o, const Resolved& r, InputSet set, const F
   return project_partial(rq, std::move(set));
 }
 
+namespace {
+// A coefficient file's level `level` into f (its coefficients, its frame,
+// the output's size and the memory check), as form() evaluates one.
+void load_level(const Settings& o, const Resolved& r, const InputSet& set, int level, Formed& f) {
+  const int threads = r.threads;
+  Coefficients& k = f.coefficients;
+  const ImageReader& reader = *set.readers.front();
+  if (set.bands.size() > 1)
+    throw RequestError("a coefficient file is evaluated alone, not with other inputs");
+  if (o.generator_given || o.method_given || o.boundary_given || o.highlight_compress)
+    throw RequestError(reader.path() + " is a coefficient file: its generator, method, boundary and "
+                       "highlight compression are recorded in it; drop --generator, --method, "
+                       "--boundary and --highlight-compress");
+  if (r.clamp == Clamp::Local)
+    throw RequestError("--clamp local needs the input samples; " + reader.path() +
+                       " is a coefficient file");
+  if (o.lattice_given || o.density_given)
+    throw RequestError(reader.path() + " is a coefficient file: its lattice is recorded in it; "
+                       "drop --lattice and --density");
+  if (r.input_transfer)
+    throw RequestError(reader.path() + " is a coefficient file: its input's transfer was decoded "
+                       "before projecting; drop --input-transfer");
+  f.from_coefficient_file = true;
+  const auto t = Clock::now();
+  k = load_coefficients(reader.path(), r.zero_nonfinite, &f.nonfinite, reader.signature(), level);
+  f.acquire_seconds = seconds_since(t);
+  if (f.nonfinite.count)
+    f.warnings.push_back("replaced " + std::to_string(f.nonfinite.count) +
+                         " non-finite coefficients with 0; first: " + f.nonfinite.where);
+  // its own size is its frame's (a hexagonal grid also covers a margin)
+  const auto [fw, fh] = visit_space(k, [&](auto space) { return space.frame(k); });
+  std::tie(f.width, f.height) = output_size(o, r, fw, fh);
+  const double radius = visit_space(k, [&](auto space) { return space.radius(k); });
+  f.estimated_bytes =
+      projection_bytes(f.width, f.height, set.channels,
+                       std::uint64_t(k.c.width) * std::uint64_t(k.c.height), false, false, threads,
+                       table_bytes(f.width, k.c.width, f.height, k.c.height, radius));
+  check_memory(f.estimated_bytes, "a " + std::to_string(f.width) + " x " +
+                                      std::to_string(f.height) + " x " +
+                                      std::to_string(set.channels) + " output");
+}
+}  // namespace
+
 Formed form(const Settings& o, const Resolved& r, InputSet set, const FormRequest& fr) {
   if (set.scattered_file) {
     const ImageReader& reader = *set.readers.front();
@@ -245,40 +288,7 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
   const int threads = r.threads;
   Coefficients& k = f.coefficients;
   if (set.coefficient_file) {
-    const ImageReader& reader = *set.readers.front();
-    if (set.bands.size() > 1)
-      throw RequestError("a coefficient file is evaluated alone, not with other inputs");
-    if (o.generator_given || o.method_given || o.boundary_given || o.highlight_compress)
-      throw RequestError(reader.path() + " is a coefficient file: its generator, method, boundary and "
-                         "highlight compression are recorded in it; drop --generator, --method, "
-                         "--boundary and --highlight-compress");
-    if (r.clamp == Clamp::Local)
-      throw RequestError("--clamp local needs the input samples; " + reader.path() +
-                         " is a coefficient file");
-    if (o.lattice_given || o.density_given)
-      throw RequestError(reader.path() + " is a coefficient file: its lattice is recorded in it; "
-                         "drop --lattice and --density");
-    if (r.input_transfer)
-      throw RequestError(reader.path() + " is a coefficient file: its input's transfer was decoded "
-                         "before projecting; drop --input-transfer");
-    f.from_coefficient_file = true;
-    const auto t = Clock::now();
-    k = load_coefficients(reader.path(), r.zero_nonfinite, &f.nonfinite, reader.signature());
-    f.acquire_seconds = seconds_since(t);
-    if (f.nonfinite.count)
-      f.warnings.push_back("replaced " + std::to_string(f.nonfinite.count) +
-                           " non-finite coefficients with 0; first: " + f.nonfinite.where);
-    // its own size is its frame's (a hexagonal grid also covers a margin)
-    const auto [fw, fh] = visit_space(k, [&](auto space) { return space.frame(k); });
-    std::tie(f.width, f.height) = output_size(o, r, fw, fh);
-    const double radius = visit_space(k, [&](auto space) { return space.radius(k); });
-    f.estimated_bytes =
-        projection_bytes(f.width, f.height, set.channels,
-                         std::uint64_t(k.c.width) * std::uint64_t(k.c.height), false, false, threads,
-                         table_bytes(f.width, k.c.width, f.height, k.c.height, radius));
-    check_memory(f.estimated_bytes, "a " + std::to_string(f.width) + " x " +
-                                        std::to_string(f.height) + " x " +
-                                        std::to_string(set.channels) + " output");
+    load_level(o, r, set, 0, f);
     f.inputs = std::move(set);
   } else {
     Projection& p = f;
@@ -308,11 +318,41 @@ Formed form(const Settings& o, const Resolved& r, InputSet set, const FormReques
   return f;
 }
 
+namespace {
+// A pyramid's coefficient file (siproject --mip --coeffs): every level
+// evaluated at its own frame.
+std::vector<Formed> evaluate_pyramid(const Settings& o, const Resolved& r, InputSet set,
+                                     const FormRequest& fr) {
+  const ImageReader& reader = *set.readers.front();
+  const int levels = coefficient_levels(reader);
+  if (levels < 2)
+    throw RequestError("--mip: " + set.label + " is a coefficient file of one level; a pyramid's "
+                       "levels are projected from the samples, or evaluated from the coefficient "
+                       "file of a pyramid (siproject --mip --coeffs)");
+  if (o.factor || o.scale || r.size.given())
+    throw RequestError("--mip: " + set.label + " holds a pyramid's levels, each at its own size; "
+                       "drop --factor, --scale and --size");
+  std::vector<Formed> formed(static_cast<std::size_t>(levels));
+  for (int j = 0; j < levels; ++j) {
+    Formed& f = formed[std::size_t(j)];
+    load_level(o, r, set, j, f);
+    f.display = r.display ? *r.display
+                          : (f.coefficients.min_error ? Display::antialiased_2x2() : Display::centred());
+    if (!fr.final_image) continue;
+    if (fr.interrupt) fr.interrupt();
+    const auto t = Clock::now();
+    f.final = final_image(f.coefficients, f.display, f.width, f.height, r.clamp, nullptr, r.threads);
+    f.resample_seconds = seconds_since(t);
+    if (!fr.keep_coefficients) Buffer<double>().swap(f.coefficients.c.data);
+  }
+  formed.front().inputs = std::move(set);
+  return formed;
+}
+}  // namespace
+
 std::vector<Formed> form_pyramid(const Settings& o, const Resolved& r, InputSet set,
                                  const FormRequest& fr) {
-  if (set.coefficient_file)
-    throw RequestError("--mip: " + set.label + " is a coefficient file, which holds one level; "
-                       "every level of a pyramid is projected from the samples");
+  if (set.coefficient_file) return evaluate_pyramid(o, r, std::move(set), fr);
   if (set.partial_files)
     throw RequestError("--mip: " + set.label + " are partial files; a pyramid is projected "
                        "from the samples (merge them first, or give the render)");

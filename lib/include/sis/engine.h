@@ -159,10 +159,11 @@ std::vector<Projection> project(const std::vector<ProjectionRequest>& requests);
 // messages name): non-finite coefficients are an
 // InputError, or replaced by 0 (counted in `replaced`). With `expected`
 // (the signature of a reader that read its header first), a file that is
-// no longer that file is an InputError.
+// no longer that file is an InputError. `level`: of a pyramid's file
+// (coefficient_levels), at that level's frame.
 Coefficients load_coefficients(const std::string& path, bool zero_nonfinite,
                                NonFiniteReport* replaced = nullptr,
-                               const FileSignature& expected = {});
+                               const FileSignature& expected = {}, int level = 0);
 
 struct FinalImage {
   Image image;

@@ -109,6 +109,10 @@ class ImageReader {
   // read; these say how many there are.
   int levels() const;
   int parts() const;
+  // Reads MIP level `level` of part 0 from now on (its size, its rows):
+  // InputError naming the file for a level it does not have.
+  void select_level(int level);
+  int level() const;
   // A luminance-chroma OpenEXR file (subsampled RY, BY channels), read as
   // half RGB(A) through OpenEXR's RGBA interface.
   bool luminance_chroma() const;
@@ -374,5 +378,18 @@ StagedFile stage_coefficients(const std::string& path, const Coefficients& k,
 bool holds_coefficients(const std::string& path);
 bool is_coefficient_file(const ImageReader& reader);
 Coefficients read_coefficients(ImageReader& reader);
+
+// A pyramid's coefficient file (siproject --mip --coeffs): the levels'
+// coefficients (sis/pyramid.h) as one tiled, MIP-mapped float OpenEXR
+// (64 x 64 tiles, zip, OpenEXR's levels rounded down), its metadata level
+// 0's coefficient file's with sis:mip_levels (the count) and
+// sis:mip_sizes (each level's frame, "WxH WxH ..."), which OpenEXR keeps
+// once for every level. Level j must be level 0's space at level j's frame
+// (the keys differ in the frame alone): OutputError otherwise.
+StagedFile stage_mip_coefficients(const std::string& path, const std::vector<const Coefficients*>& levels);
+// The coefficient levels such a file holds (1 for any other coefficient
+// file); read_coefficients reads the reader's selected level (select_level)
+// at that level's frame.
+int coefficient_levels(const ImageReader& reader);
 
 }  // namespace sis
