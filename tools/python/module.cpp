@@ -192,7 +192,7 @@ int resolved_threads(int threads) {
 // (H, W, C): the caller's wrapper makes it so), the GIL released.
 // Returns (image or None, coefficients or None, warnings).
 py::tuple run_form(py::object input, const Settings& s, bool coefficients_only,
-                   const std::optional<ScatteredArrays>& scattered) {
+                   const std::optional<ScatteredArrays>& scattered, bool pyramid) {
   const bool is_array = py::isinstance<py::array>(input);
   std::vector<ProjectionInput> inputs;
   py::array array;
@@ -224,6 +224,24 @@ py::tuple run_form(py::object input, const Settings& s, bool coefficients_only,
     fr.final_image = !coefficients_only;
     SignalPoll signals;
     fr.interrupt = signals.hook();
+    if (pyramid) {  // every level's final image (siproject --mip)
+      if (scattered || coefficients_only)
+        throw std::logic_error("run_form(): a pyramid of scattered samples or of coefficients");
+      std::vector<Formed> levels;
+      try {
+        py::gil_scoped_release free;
+        levels = form_pyramid(s, r, inspect(inputs), fr);
+      } catch (...) {
+        if (signals.raised()) signals.raise();
+        throw;
+      }
+      py::list out, warnings;
+      for (Formed& f : levels) {
+        for (const std::string& w : f.warnings) warnings.append(w);
+        out.append(to_array(std::move(f.final.image)));
+      }
+      return py::make_tuple(out, py::none(), warnings);
+    }
     Formed f;
     SampleView values;
     const double *positions = nullptr, *weights = nullptr;
@@ -302,7 +320,7 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
                     bool highlight_compress, int threads, bool coefficients_only,
                     const std::string& input_transfer, std::optional<py::array> positions,
                     std::optional<py::array> weights, std::optional<std::string> rule,
-                    std::optional<int> iterations) {
+                    std::optional<int> iterations, bool pyramid) {
   Settings s = settings_of(size, factor, factor_spelling, generator, method, display, boundary,
                            lattice, density, density_spelling, nonfinite, prefilter, clamp,
                            highlight_compress, threads, input_transfer);
@@ -316,7 +334,7 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
     if (!scattered->positions || (weights && !*scattered->weights))
       throw std::logic_error("_form(): positions or weights not float64");
   }
-  return run_form(input, s, coefficients_only, scattered);
+  return run_form(input, s, coefficients_only, scattered, pyramid);
 }
 
 std::string pair_text(const std::pair<long, long>& p) {
@@ -656,7 +674,7 @@ PYBIND11_MODULE(_core, m) {
         py::arg("nonfinite"), py::arg("prefilter"), py::arg("clamp"),
         py::arg("highlight_compress"), py::arg("threads"), py::arg("coefficients_only"),
         py::arg("input_transfer"), py::arg("positions"), py::arg("weights"), py::arg("rule"),
-        py::arg("iterations"));
+        py::arg("iterations"), py::arg("pyramid") = false);
   m.def("_partial",
         [](py::object input, const std::string& out, std::optional<std::pair<long, long>> bands,
            std::optional<std::pair<long, long>> rows, std::optional<long> grid_rows,

@@ -41,6 +41,7 @@ __version__ = _core.__version__
 __all__ = [
     "project",
     "coefficients",
+    "pyramid",
     "load",
     "partial",
     "merge",
@@ -266,7 +267,8 @@ def _grey(input, positions=None) -> bool:
 
 def _form(input, coefficients_only, *, size, output_shape, factor, generator, method, display,
           boundary, lattice, density, nonfinite, prefilter, clamp, highlight_compress, threads,
-          input_transfer, positions=None, weights=None, rule=None, iterations=None):
+          input_transfer, positions=None, weights=None, rule=None, iterations=None,
+          pyramid=False):
     factor_spelling = "" if factor is None else str(factor)  # as given, for messages
     density_spelling = "" if density is None else str(density)
     factor = _number("factor", factor, optional=True)
@@ -304,7 +306,7 @@ def _form(input, coefficients_only, *, size, output_shape, factor, generator, me
         threads=_threads(threads),
         coefficients_only=coefficients_only,
         input_transfer=_text("input_transfer", input_transfer),
-        positions=p, weights=w, rule=rule, iterations=iterations)
+        positions=p, weights=w, rule=rule, iterations=iterations, pyramid=pyramid)
     for w in result[2]:
         _warnings.warn(w, RuntimeWarning, stacklevel=3)
     return result
@@ -374,6 +376,41 @@ def project(input: Input, *, size: Optional[Size] = None,
                         input_transfer=input_transfer, positions=positions, weights=weights,
                         rule=rule, iterations=iterations)
     return image[:, :, 0] if _grey(input, positions) else image
+
+
+def pyramid(input: Input, *, size: Optional[Size] = None,
+            output_shape: Optional[Tuple[int, int]] = None, factor: Optional[float] = None,
+            generator: Optional[str] = None, method: Optional[str] = None,
+            display: Optional[str] = None, boundary: str = "mirror",
+            nonfinite: str = "error", prefilter: str = "fft", clamp: str = "none",
+            highlight_compress: bool = False, threads: int = 0,
+            input_transfer: str = "auto") -> list:
+    """Every level of a min-error pyramid, as siproject --mip forms them.
+
+    Level 0 is project()'s image for the same keywords; level j is
+    max(1, floor(W / 2^j)) x max(1, floor(H / 2^j)) (maketx's sizes), down
+    to 1 x 1, each the projection of the samples themselves onto the space
+    at that level's frame (not a filtered copy of the level above), all
+    from one reading of the input. input: as project()'s (a path or an
+    array), or a pyramid's coefficient file (siproject --mip --coeffs),
+    whose levels are evaluated. The Cartesian lattice only; no positions=.
+
+    Returns a list of float32 arrays, level 0 first: (height, width,
+    channels), or (height, width) for an array of two dimensions.
+    """
+    try:
+        levels, _, _ = _form(input, False, size=size, output_shape=output_shape, factor=factor,
+                             generator=generator, method=method, display=display,
+                             boundary=boundary, lattice="cartesian", density=None,
+                             nonfinite=nonfinite, prefilter=prefilter, clamp=clamp,
+                             highlight_compress=highlight_compress, threads=threads,
+                             input_transfer=input_transfer, pyramid=True)
+    except ValueError as e:  # the engine names siproject's option
+        text = str(e)
+        if not text.startswith("--mip: "):
+            raise
+        raise ValueError("pyramid(): " + text[len("--mip: "):]) from None
+    return [a[:, :, 0] for a in levels] if _grey(input) else levels
 
 
 def coefficients(input: Input, *, size: Optional[Size] = None,
