@@ -1,6 +1,6 @@
 #pragma once
 // The spline smoothness functional of the variational fit (docs/design.md
-// section 25), exact for the Cartesian B-spline space of degree n with steps
+// section 15), exact for the Cartesian B-spline space of degree n with steps
 // hx, hy: f(x, y) = sum_n c_n beta_n((x - x_n) / hx) beta_n((y - y_n) / hy),
 //   order 1: J(f) = int |grad f|^2,
 //   order 2: J(f) = int f_xx^2 + 2 f_xy^2 + f_yy^2 (thin plate),
