@@ -79,7 +79,7 @@ def measure(a):
                     l2 = truth.l2_error(k)
                     if rule == "variational":
                         note = "lambda %.3g" % k.report["lambda"]
-                except ValueError as e:
+                except (ValueError, OSError) as e:
                     note = str(e).splitlines()[0][:120]
                 rows.append(dict(scene=scene, rays=float(rays), method=rule, l2=l2,
                                  seconds=time.perf_counter() - t, note=note))
