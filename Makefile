@@ -600,3 +600,35 @@ docs:
 	  $(PYTHON) scripts/docs_picture.py $(OUT)/checker docs/img/methods.png && \
 	  echo "docs: docs/img/methods.png from $(OUT)/checker"; \
 	else echo "docs: no $(OUT)/checker images (run make): picture left as it is"; fi
+
+# make compare-sparse [QUICK=1]: fewer rays than pixels (docs/studies.md):
+# the variational rule, the fit, the normalised sum and scipy's griddata of
+# sobol rays at 0.25, 0.5 and 1 ray per pixel, against the conventional tent
+# of the regular factor-1 render; the continuous L2 error against the
+# regular reference at SP_REF_FACTOR. $(OUT)/report(-quick)/sparse/sparse.md,
+# sparse.csv. QUICK=1: objects at 128^2, reference factor 16.
+ifneq ($(QUICK),)
+SP_SCENES ?= objects
+SP_RES ?= 128
+SP_REF_FACTOR ?= 16
+else
+SP_SCENES ?= objects checker edges hdr
+SP_RES ?= 256
+SP_REF_FACTOR ?= 32
+endif
+SP_SEED ?= 0
+SP_WORK ?= $(OUT)/compare-sparse$(if $(QUICK),-quick)
+SP_MAKE = $(MAKE) --no-print-directory SIPROJECT=$(SIPROJECT) SIMETRICS=$(SIMETRICS) SIRAYS=$(SIRAYS) \
+  OUT=$(SP_WORK) RES=$(SP_RES) ZP_NYQUIST=$(ZP_NYQUIST)
+.PHONY: compare-sparse
+compare-sparse: $(if $(PREBUILT),,build)
+	@set -e; for s in $(SP_SCENES); do \
+	  $(SP_MAKE) SCENE=$$s FACTOR=$(SP_REF_FACTOR) render; \
+	  $(SP_MAKE) SCENE=$$s FACTOR=1 render; \
+	  for f in 0.5 0.70710678 1; do \
+	    $(SP_MAKE) -j$(JOBS) SCENE=$$s FACTOR=$$f SAMPLES=sobol SEED=$(SP_SEED) render; \
+	  done; \
+	done
+	@PYTHONPATH=$(BUILD)/python $(PYTHON) scripts/compare_sparse.py --work $(SP_WORK) \
+	  --report $(OUT)/report$(if $(QUICK),-quick)/sparse --scenes "$(SP_SCENES)" --res $(SP_RES) \
+	  --ref-factor $(SP_REF_FACTOR) --seed $(SP_SEED)

@@ -725,3 +725,54 @@ TEST_F(Cli, CompressionAsAskedOrRefused) {
   for (const char* name : {"o.exr", "o.tif", "o.png", "o.bmp", "o.jpg", "g.exr"})
     EXPECT_FALSE(fs::exists(path(name))) << name;
 }
+
+namespace {
+
+// A scattered-samples file: n x 1 pixels of channels R, pFilm.x, pFilm.y at
+// pseudo-random positions in a W x H frame.
+void write_scattered(const std::string& path, int n, double W, double H) {
+  OIIO::ImageSpec spec(n, 1, 3, OIIO::TypeDesc::FLOAT);
+  spec.channelnames = {"R", "pFilm.x", "pFilm.y"};
+  std::vector<float> data(std::size_t(n) * 3);
+  for (int i = 0; i < n; ++i) {
+    data[3 * i] = float(0.2 + 0.5 * std::fmod(i * 0.618034, 1.0));
+    data[3 * i + 1] = float(W * std::fmod(i * 0.7548777 + 0.1, 1.0));
+    data[3 * i + 2] = float(H * std::fmod(i * 0.5698403 + 0.3, 1.0));
+  }
+  auto out = OIIO::ImageOutput::create(path);
+  ASSERT_TRUE(out && out->open(path, spec) &&
+              out->write_image(OIIO::TypeDesc::FLOAT, data.data()) && out->close());
+}
+
+}  // namespace
+
+TEST_F(Cli, VariationalRuleRunsAndRefusesBadOptions) {
+  write_scattered(path("s.exr"), 200, 16, 12);
+  const std::string in = path("s.exr") + " --size 16x12 -o " + path("v.exr");
+  const Result ok = run(in + " --rule variational --lambda 0.1");
+  ASSERT_EQ(ok.status, 0) << ok.output;
+  EXPECT_EQ(size_of(path("v.exr")), std::make_pair(16L, 12L));
+  const Result gcv = run(in + " --rule variational --smoothness 1");
+  ASSERT_EQ(gcv.status, 0) << gcv.output;
+  fs::remove(path("v.exr"));
+  struct Case {
+    std::string opts, needle;
+  };
+  for (const Case& c : {Case{"--rule variational --lambda -1", "--lambda '-1'"},
+                        Case{"--rule variational --lambda nan", "--lambda 'nan'"},
+                        Case{"--rule variational --lambda big", "--lambda 'big'"},
+                        Case{"--rule variational --smoothness 3", "--smoothness 3"},
+                        Case{"--rule variational --lattice hex", "--lattice cartesian"},
+                        Case{"--rule fit --lambda 0.1", "--lambda applies to --rule variational"}}) {
+    const Result r = run(in + " " + c.opts);
+    EXPECT_NE(r.status, 0) << c.opts;
+    EXPECT_TRUE(contains(r.output, c.needle)) << c.opts << ": " << r.output;
+    EXPECT_FALSE(fs::exists(path("v.exr"))) << c.opts;
+  }
+  write_scattered(path("two.exr"), 2, 16, 12);
+  const Result few = run(path("two.exr") + " --size 16x12 -o " + path("v.exr") +
+                         " --rule variational --lambda 0.1");
+  EXPECT_NE(few.status, 0);
+  EXPECT_TRUE(contains(few.output, "at least 3 samples, got 2")) << few.output;
+  EXPECT_FALSE(fs::exists(path("v.exr")));
+}

@@ -453,6 +453,9 @@ int run(const Options& o) {
         std::fprintf(stderr, ", %d iterations, residual", sr.iterations);
         for (double v : sr.residual) std::fprintf(stderr, " %.3g", v);
       }
+      if (r.scattered.rule == ScatteredRule::Variational)
+        std::fprintf(stderr, ", lambda %.6g%s, %d iterations", sr.lambda,
+                     r.scattered.lambda ? "" : " (gcv)", sr.iterations);
       std::fprintf(stderr, ", %s of working grids\n", format_bytes(sr.bytes).c_str());
     }
     std::fprintf(stderr, "siproject: output range [%g, %g], %ld negative samples", before.min,
@@ -760,8 +763,17 @@ int main(int argc, char** argv) try {
       "--rule", o.settings.rule,
       "scattered samples (an EXR with position channels pFilm.x, pFilm.y): fit (weighted "
       "least squares by preconditioned conjugate gradients), normalised (the sum normalised by "
-      "the weight sums, one pass) or plain (the weighted sum, for comparison) [default: fit; "
-      "normalised for --method conventional]");
+      "the weight sums, one pass), plain (the weighted sum, for comparison) or variational (the "
+      "smoothing spline: least squares plus --lambda times the --smoothness functional) [default: "
+      "fit; normalised for --method conventional]");
+  auto* lambda = app.add_option("--lambda", o.settings.lambda,
+                                "--rule variational: the smoothness weight, a number >= 0 (frame "
+                                "units, output pixels), or gcv (generalised cross-validation)")
+                     ->capture_default_str();
+  auto* smoothness = app.add_option("--smoothness", o.settings.smoothness,
+                                    "--rule variational: the functional's order, 1 (|grad f|^2) or "
+                                    "2 (thin plate, f_xx^2 + 2 f_xy^2 + f_yy^2)")
+                         ->capture_default_str();
   auto* iterations = app.add_option("--iterations", o.settings.iterations,
                                     "--rule fit: at most this many conjugate-gradient iterations")
                          ->capture_default_str();
@@ -830,6 +842,8 @@ int main(int argc, char** argv) try {
   st.density_given = dens->count() > 0;
   st.rule_given = rule->count() > 0;
   st.iterations_given = iterations->count() > 0;
+  st.lambda_given = lambda->count() > 0;
+  st.smoothness_given = smoothness->count() > 0;
   if (fac->count() > 0) {
     st.factor = factor;
     st.factor_spelling = fac->as<std::string>();

@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <mutex>
+
+#include <fftw3.h>
 #include <initializer_list>
 #include <memory>
 #include <sstream>
@@ -13,9 +16,12 @@
 #include <utility>
 #include <variant>
 
+#include "fftw_planner.h"
 #include "hex_scattered.h"
 #include "sis/hex_prefilter.h"
 #include "sis/parallel.h"
+#include "sis/smoothness.h"
+#include "sis/generator.h"
 #include "value_width.h"
 
 namespace sis {
@@ -815,6 +821,7 @@ const char* scattered_rule_name(ScatteredRule rule) {
     case ScatteredRule::NormalisedSum: return "normalised";
     case ScatteredRule::LeastSquares: return "fit";
     case ScatteredRule::PlainSum: return "plain";
+    case ScatteredRule::Variational: return "variational";
   }
   return "?";
 }
@@ -823,8 +830,9 @@ ScatteredRule parse_scattered_rule(const std::string& spelling) {
   if (spelling == "normalised") return ScatteredRule::NormalisedSum;
   if (spelling == "fit") return ScatteredRule::LeastSquares;
   if (spelling == "plain") return ScatteredRule::PlainSum;
+  if (spelling == "variational") return ScatteredRule::Variational;
   throw std::invalid_argument("unknown scattered rule '" + spelling +
-                              "' (expected normalised, fit or plain)");
+                              "' (expected normalised, fit, plain or variational)");
 }
 
 ScatteredAcquisition::ScatteredAcquisition(const ScatteredTarget& target, int channels,
@@ -883,9 +891,9 @@ Coefficients ScatteredAcquisition::finish(ScatteredRule rule) const {
   if (failed_)
     throw std::logic_error(
         "scattered acquisition: an earlier add() met a bad sample; its sums hold part of that call");
-  if (rule == ScatteredRule::LeastSquares)
+  if (rule == ScatteredRule::LeastSquares || rule == ScatteredRule::Variational)
     throw std::invalid_argument(
-        "scattered acquisition: the least-squares fit needs every sample again "
+        "scattered acquisition: the least-squares and variational fits need every sample again "
         "(project_scattered), not one pass");
   const bool min_error = target_.method == Method::MinError;
   if (!min_error && rule != ScatteredRule::NormalisedSum)
@@ -1051,10 +1059,219 @@ void conjugate_gradients(Grid<double>& x, const Grid<double>& b, const ApplyG& a
   rep.bytes += (r.data.size() * 5) * sizeof(double);
 }
 
+// The variational rule's spectral preconditioner: out = (hx hy a + lambda R)^{-1} in,
+// diagonal in the boundary rule's transform (mirror: the 2-D DCT-II, periodic:
+// the 2-D DFT), one channel at a time on one thread.
+class SpectralPreconditioner {
+ public:
+  SpectralPreconditioner(long nx, long ny, Boundary boundary, const std::vector<double>& a,
+                         double area, const SmoothnessOperator& R, double lambda)
+      : nx_(nx), ny_(ny), periodic_(boundary == Boundary::Periodic) {
+    const long kx = periodic_ ? nx / 2 + 1 : nx;
+    const double step = periodic_ ? 2 * M_PI : M_PI;
+    inverse_.resize(std::size_t(kx) * ny);
+    for (long y = 0; y < ny; ++y)
+      for (long x = 0; x < kx; ++x) {
+        const double wx = step * x / nx, wy = step * y / ny;
+        const double e = area * taps_spectrum(a, wx) * taps_spectrum(a, wy) + lambda * R.spectrum(wx, wy);
+        inverse_[std::size_t(y) * kx + x] = 1.0 / (e * (periodic_ ? double(nx) * ny : 4.0 * nx * ny));
+      }
+    real_ = fftw_alloc_real(std::size_t(nx) * ny);
+    bins_ = periodic_ ? fftw_alloc_complex(std::size_t(kx) * ny) : nullptr;
+    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
+    if (periodic_) {
+      forward_ = fftw_plan_dft_r2c_2d(int(ny), int(nx), real_, bins_, FFTW_ESTIMATE);
+      backward_ = fftw_plan_dft_c2r_2d(int(ny), int(nx), bins_, real_, FFTW_ESTIMATE);
+    } else {
+      forward_ = fftw_plan_r2r_2d(int(ny), int(nx), real_, real_, FFTW_REDFT10, FFTW_REDFT10,
+                                  FFTW_ESTIMATE);
+      backward_ = fftw_plan_r2r_2d(int(ny), int(nx), real_, real_, FFTW_REDFT01, FFTW_REDFT01,
+                                   FFTW_ESTIMATE);
+    }
+  }
+  ~SpectralPreconditioner() {
+    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
+    fftw_destroy_plan(forward_);
+    fftw_destroy_plan(backward_);
+    fftw_free(real_);
+    if (bins_) fftw_free(bins_);
+  }
+  SpectralPreconditioner(const SpectralPreconditioner&) = delete;
+  SpectralPreconditioner& operator=(const SpectralPreconditioner&) = delete;
+
+  void operator()(const Grid<double>& in, Grid<double>& out) const {
+    const int C = in.channels;
+    const std::size_t n = std::size_t(nx_) * ny_;
+    for (int c = 0; c < C; ++c) {
+      for (std::size_t e = 0; e < n; ++e) real_[e] = in.data[e * C + c];
+      fftw_execute(forward_);
+      if (periodic_)
+        for (std::size_t e = 0; e < inverse_.size(); ++e) {
+          bins_[e][0] *= inverse_[e];
+          bins_[e][1] *= inverse_[e];
+        }
+      else
+        for (std::size_t e = 0; e < n; ++e) real_[e] *= inverse_[e];
+      fftw_execute(backward_);
+      for (std::size_t e = 0; e < n; ++e) out.data[e * C + c] = real_[e];
+    }
+  }
+
+ private:
+  long nx_, ny_;
+  bool periodic_;
+  std::vector<double> inverse_;
+  double* real_ = nullptr;
+  fftw_complex* bins_ = nullptr;
+  fftw_plan forward_ = nullptr, backward_ = nullptr;
+};
+
+// A Rademacher value (+-1) for probe p at sample i: splitmix64 of (p, i).
+double rademacher(int p, long i) {
+  std::uint64_t z = (std::uint64_t(p) << 40) ^ std::uint64_t(i);
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  z ^= z >> 31;
+  return (z >> 63) ? 1.0 : -1.0;
+}
+
+Coefficients project_variational(const ScatteredSamples& samples, const ScatteredTarget& target,
+                                 const ScatteredOptions& options, ScatteredReport* report) {
+  const int threads = options.threads < 1 ? 1 : options.threads;
+  if (is_hexagonal(target))
+    throw std::invalid_argument(
+        "scattered projection: the variational rule needs the Cartesian lattice (--lattice "
+        "cartesian), not the hexagonal one");
+  if (target.method != Method::MinError)
+    throw std::invalid_argument(
+        "scattered projection: the conventional method takes the normalised weighted average, not "
+        "the variational rule");
+  if (options.lambda && !(*options.lambda >= 0 && std::isfinite(*options.lambda)))
+    throw std::invalid_argument("scattered projection: the variational rule's lambda must be a "
+                                "finite number >= 0, not " + std::to_string(*options.lambda));
+  if (options.smoothness != 1 && options.smoothness != 2)
+    throw std::invalid_argument("scattered projection: the smoothness order must be 1 or 2, not " +
+                                std::to_string(options.smoothness));
+  if (options.variational_iterations < 0 || !(options.variational_tolerance >= 0) ||
+      options.gcv_probes < 1)
+    throw std::invalid_argument(
+        "scattered projection: the variational rule's iterations and tolerance must be >= 0, its "
+        "probes >= 1");
+  const Geometry g = geometry(target);
+  const int degree = kernel_of(target).degree();
+  const SmoothnessOperator R(degree, options.smoothness, g.hx, g.hy, target.boundary);
+  const long N = samples.count();
+  const long needed = options.smoothness == 2 ? 3 : 1;  // J's null space: affine / constant
+  if (N < needed)
+    throw std::invalid_argument("scattered projection: the variational rule of order " +
+                                std::to_string(options.smoothness) + " needs at least " +
+                                std::to_string(needed) + " samples, got " + std::to_string(N));
+  const int C = samples.channels;
+  check(samples, target, C, threads);
+  const bool gcv = !options.lambda;
+  const int P = gcv ? options.gcv_probes : 0;
+  // The samples with their weights explicit and, for GCV, the probes as
+  // extra channels: value z_i / sqrt(w_i), so that b = Phi^T W^{1/2} z.
+  ScatteredSamples s;
+  s.positions = samples.positions;
+  s.times = samples.times;
+  s.channels = C + P;
+  s.weights = samples.weights.empty()
+                  ? std::vector<double>(std::size_t(N), target.width * target.height / double(N))
+                  : samples.weights;
+  s.values.resize(std::size_t(N) * (C + P));
+  for (long i = 0; i < N; ++i) {
+    for (int c = 0; c < C; ++c) s.values[std::size_t(i) * (C + P) + c] = samples.values[std::size_t(i) * C + c];
+    for (int p = 0; p < P; ++p)
+      s.values[std::size_t(i) * (C + P) + C + p] = rademacher(p, i) / std::sqrt(s.weights[i]);
+  }
+  const int A = C + P;
+  const RowPlan rows = plan_rows(s, g, reach(kernel_of(target)), threads);
+  ScatteredReport rep;
+  Grid<double> sums(g.nx, g.ny, A + 1);
+  splat(s, target, g, rows, s.values.data(), A, sums, threads);
+  rep.passes = 1;
+  Grid<double> b(g.nx, g.ny, A);
+  for (std::size_t e = 0; e < b.data.size() / A; ++e)
+    for (int c = 0; c < A; ++c) b.data[e * A + c] = sums.data[e * (A + 1) + c];
+  std::vector<double> at(std::size_t(N) * A);
+  const std::vector<double> a = bspline_derivative_autocorrelation(degree, 0);
+  const double area = g.hx * g.hy;
+  ScatteredOptions cg = options;
+  cg.iterations = options.variational_iterations;
+  cg.tolerance = options.variational_tolerance;
+  double wsum = 0;
+  for (long i = 0; i < N; ++i) wsum += s.weights[i];
+  auto solve = [&](double lambda, Grid<double>& x) {
+    Grid<double> rc(g.nx, g.ny, A);
+    auto apply = [&](const Grid<double>& v, Grid<double>& out) {
+      evaluate(s, target, g, v, at.data(), threads);
+      std::fill(out.data.begin(), out.data.end(), 0.0);
+      splat(s, target, g, rows, at.data(), A, out, threads);
+      rep.passes += 2;
+      if (lambda > 0) {
+        R.apply(v, rc);
+        for (std::size_t e = 0; e < out.data.size(); ++e) out.data[e] += lambda * rc.data[e];
+      }
+    };
+    const SpectralPreconditioner pre(g.nx, g.ny, target.boundary, a, area, R, lambda);
+    std::fill(x.data.begin(), x.data.end(), 0.0);
+    ScatteredReport r;
+    conjugate_gradients(x, b, apply, pre, cg, r);
+    rep.iterations += r.iterations;
+    rep.residual = r.residual;
+  };
+  Grid<double> x(g.nx, g.ny, A), best;
+  double best_lambda = 0;
+  if (!gcv) {
+    best_lambda = *options.lambda;
+    solve(best_lambda, x);
+    best = std::move(x);
+  } else {
+    const double h = std::max(g.hx, g.hy), unit = std::pow(h, 2 * options.smoothness);
+    double best_score = 0;
+    for (int k = 0; k <= 14; ++k) {
+      const double lambda = unit * std::pow(10.0, -6 + 0.5 * k);
+      solve(lambda, x);
+      evaluate(s, target, g, x, at.data(), threads);
+      rep.passes += 1;
+      double rss = 0, trace = 0;
+      for (long i = 0; i < N; ++i) {
+        const double w = s.weights[i] * double(N) / wsum;
+        for (int c = 0; c < C; ++c) {
+          const double r = s.values[std::size_t(i) * A + c] - at[std::size_t(i) * A + c];
+          rss += w * r * r;
+        }
+        for (int p = 0; p < P; ++p)
+          trace += rademacher(p, i) * std::sqrt(s.weights[i]) * at[std::size_t(i) * A + C + p];
+      }
+      trace /= P;
+      const double dof = std::max(double(N) - trace, 1e-300);
+      const double score = double(N) * rss / C / (dof * dof);
+      rep.gcv.push_back({lambda, score});
+      if (k == 0 || score < best_score) {
+        best_score = score;
+        best_lambda = lambda;
+        best = x;
+      }
+    }
+  }
+  Grid<double> c(g.nx, g.ny, C, kUnset);
+  for (std::size_t e = 0; e < c.data.size() / C; ++e)
+    for (int ch = 0; ch < C; ++ch) c.data[e * C + ch] = best.data[e * A + ch];
+  rep.lambda = best_lambda;
+  rep.residual.resize(C);
+  rep.bytes = (sums.data.size() + 7 * b.data.size() + at.size() + s.values.size()) * sizeof(double);
+  if (report) *report = rep;
+  return make_coefficients(target, std::move(c));
+}
+
 }  // namespace
 
 Coefficients project_scattered(const ScatteredSamples& samples, const ScatteredTarget& target,
                                const ScatteredOptions& options, ScatteredReport* report) {
+  if (options.rule == ScatteredRule::Variational) return project_variational(samples, target, options, report);
   const int threads = options.threads < 1 ? 1 : options.threads;
   ScatteredAcquisition acq(target, samples.channels, threads);
   acq.add(samples);

@@ -132,8 +132,31 @@ Resolved resolve(const Settings& o) {
   try {
     r.scattered.rule = parse_scattered_rule(o.rule);
   } catch (const std::invalid_argument&) {
-    throw RequestError("--rule '" + o.rule + "': expected fit, normalised or plain");
+    throw RequestError("--rule '" + o.rule + "': expected fit, normalised, plain or variational");
   }
+  if ((o.lambda_given || o.smoothness_given) && r.scattered.rule != ScatteredRule::Variational)
+    throw RequestError(std::string(o.lambda_given ? "--lambda" : "--smoothness") +
+                       " applies to --rule variational");
+  if (o.lambda != "gcv") {
+    double v = 0;
+    std::size_t used = 0;
+    try {
+      v = std::stod(o.lambda, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != o.lambda.size() || o.lambda.empty() || !std::isfinite(v) || v < 0)
+      throw RequestError("--lambda '" + o.lambda + "': expected gcv or a finite number >= 0");
+    r.scattered.lambda = v;
+  }
+  if (o.smoothness != 1 && o.smoothness != 2)
+    throw RequestError("--smoothness " + std::to_string(o.smoothness) +
+                       ": expected 1 (gradient) or 2 (thin plate)");
+  r.scattered.smoothness = o.smoothness;
+  if (r.scattered.rule == ScatteredRule::Variational &&
+      std::holds_alternative<HexagonalSpace>(r.space))
+    throw RequestError("--rule variational: needs --lattice cartesian (the smoothness functional "
+                       "is built for the Cartesian B-spline space), not --lattice hex");
   // the conventional methods take the normalised average
   if (r.method == Method::Conventional && !o.rule_given) r.scattered.rule = ScatteredRule::NormalisedSum;
   if (o.iterations < 0)
@@ -215,8 +238,8 @@ ProjectionRequest projection_request(const Settings& o, const Resolved& r, const
 
 // --rule and --iterations: scattered samples only.
 void refuse_scattered_options(const Settings& o, const std::string& label) {
-  if (o.rule_given || o.iterations_given)
-    throw RequestError(std::string(o.rule_given ? "--rule" : "--iterations") +
+  if (o.rule_given || o.iterations_given || o.lambda_given || o.smoothness_given)
+    throw RequestError(std::string(o.rule_given ? "--rule" : o.iterations_given ? "--iterations" : o.lambda_given ? "--lambda" : "--smoothness") +
                        " applies to scattered samples (a file with position channels " +
                        kPositionChannelX + ", " + kPositionChannelY + ", or positions= in Python); " +
                        label + " is a grid of samples");

@@ -188,7 +188,7 @@ BAD = [
     (dict(values=_with(_V, (9, 1), np.inf), positions=_P, size=8), r"values: row 9: non-finite value \(NaN or Inf\) in channel G"),
     (dict(values=_V, positions=_P, size=8, weights=_with(np.ones(64), 3, 0.0)), r"weights: row 3: weight 0 \(the area a sample stands for: finite and > 0\)"),
     (dict(values=_V, positions=_P, size=8, weights=_with(np.ones(64), 4, np.nan)), r"weights: row 4: weight nan"),
-    (dict(values=_V, positions=_P, size=8, rule="best"), r"--rule 'best': expected fit, normalised or plain"),
+    (dict(values=_V, positions=_P, size=8, rule="best"), r"--rule 'best': expected fit, normalised, plain or variational"),
     (dict(values=_V, positions=_P, size=8, iterations=-1), r"--iterations -1: expected 0 or more"),
     (dict(values=_V, positions=_P, size=8, clamp="local"), r"--clamp local: values: scattered samples have no local range"),
     (dict(values=_V, positions=_P, size="50%"), r"--size 50%: values: scattered samples need the frame as --size WxH in pixels"),

@@ -320,12 +320,15 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
                     bool highlight_compress, int threads, bool coefficients_only,
                     const std::string& input_transfer, std::optional<py::array> positions,
                     std::optional<py::array> weights, std::optional<std::string> rule,
-                    std::optional<int> iterations, bool pyramid) {
+                    std::optional<int> iterations, std::optional<std::string> lambda,
+                    std::optional<int> smoothness, bool pyramid) {
   Settings s = settings_of(size, factor, factor_spelling, generator, method, display, boundary,
                            lattice, density, density_spelling, nonfinite, prefilter, clamp,
                            highlight_compress, threads, input_transfer);
   if (rule) s.rule = *rule, s.rule_given = true;
   if (iterations) s.iterations = *iterations, s.iterations_given = true;
+  if (lambda) s.lambda = *lambda, s.lambda_given = true;
+  if (smoothness) s.smoothness = *smoothness, s.smoothness_given = true;
   std::optional<ScatteredArrays> scattered;
   if (positions) {
     scattered = ScatteredArrays{py::reinterpret_borrow<py::array>(input),
@@ -661,6 +664,7 @@ PYBIND11_MODULE(_core, m) {
         d["residual"] = c.report->residual;
         d["passes"] = c.report->passes;
         d["bytes"] = c.report->bytes;
+        if (c.rule == ScatteredRule::Variational) d["lambda"] = c.report->lambda;
         return d;
       })
       .def_property_readonly("array", &grid_array)
@@ -674,7 +678,8 @@ PYBIND11_MODULE(_core, m) {
         py::arg("nonfinite"), py::arg("prefilter"), py::arg("clamp"),
         py::arg("highlight_compress"), py::arg("threads"), py::arg("coefficients_only"),
         py::arg("input_transfer"), py::arg("positions"), py::arg("weights"), py::arg("rule"),
-        py::arg("iterations"), py::arg("pyramid") = false);
+        py::arg("iterations"), py::arg("lambda_"), py::arg("smoothness"),
+        py::arg("pyramid") = false);
   m.def("_partial",
         [](py::object input, const std::string& out, std::optional<std::pair<long, long>> bands,
            std::optional<std::pair<long, long>> rows, std::optional<long> grid_rows,

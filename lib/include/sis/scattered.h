@@ -12,6 +12,12 @@
 //                  b[n] = sum_i w_i f_i phi_i,n, by conjugate gradients
 //                  preconditioned with a^{-1} from the NormalisedSum's
 //                  coefficients; it reproduces every spline of the space.
+//   Variational:   the smoothing spline, min sum_i w_i (f_i - f_app(x_i))^2
+//                  + lambda J(f_app), J the smoothness functional
+//                  (sis/smoothness.h): (G + lambda R) c = b by conjugate
+//                  gradients preconditioned with the DCT/DFT diagonal of
+//                  hx hy a + lambda R, lambda given or by generalised
+//                  cross-validation (docs/design.md section 15); Cartesian only.
 // PlainSum (r[n] = sum_i w_i f_i phi_i,n, then the prefilter) is the unbiased
 // but inexact estimate, kept for comparison. The conventional methods take
 // the normalised weighted average p[n] = sum_i w_i f_i K_i,n / sum_i w_i K_i,n.
@@ -24,6 +30,7 @@
 // to the images in one period of it (docs/design.md section 11).
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -56,8 +63,8 @@ struct ScatteredSamples {
   Sample sample(long i) const;
 };
 
-enum class ScatteredRule { NormalisedSum, LeastSquares, PlainSum };
-const char* scattered_rule_name(ScatteredRule rule);  // "normalised" | "fit" | "plain"
+enum class ScatteredRule { NormalisedSum, LeastSquares, PlainSum, Variational };
+const char* scattered_rule_name(ScatteredRule rule);  // "normalised" | "fit" | "plain" | "variational"
 ScatteredRule parse_scattered_rule(const std::string& spelling);
 
 // The target space: a frame of width x height output pixels and a space
@@ -89,6 +96,17 @@ struct ScatteredOptions {
   // Threads of the passes and the prefilter; the result is the same bits
   // for any count.
   int threads = 1;
+  // Variational: lambda (frame units: output pixels) >= 0, or empty for
+  // generalised cross-validation over lambda = t h^(2 order), t = 10^-6,
+  // 10^-5.5, ..., 10^1 (h the larger lattice step), the trace of the hat
+  // matrix estimated with gcv_probes Rademacher probes; the functional's
+  // order (1 or 2); at most variational_iterations CG iterations, fewer when
+  // the residual falls to variational_tolerance times b's.
+  std::optional<double> lambda;
+  int smoothness = 2;
+  int gcv_probes = 4;
+  int variational_iterations = 200;
+  double variational_tolerance = 1e-9;
 };
 
 struct ScatteredReport {
@@ -96,6 +114,8 @@ struct ScatteredReport {
   std::vector<double> residual;  // per channel: ||b - G c|| / ||b|| at the end (LeastSquares)
   std::size_t bytes = 0;         // the rule's working grids
   long passes = 0;               // passes over the samples
+  double lambda = 0;             // Variational: the lambda used (given or chosen)
+  std::vector<std::pair<double, double>> gcv;  // Variational by GCV: (lambda, score) tried
 };
 
 // Streams samples into the sums of one pass: numerator sum_i w_i f_i phi_i,n

@@ -41,11 +41,16 @@ struct Settings {
   // plain) and the fit's iterations.
   std::string rule = "fit";
   int iterations = 5;
+  // --rule variational: lambda (a number >= 0, or gcv) and the smoothness
+  // functional's order (1 or 2).
+  std::string lambda = "gcv";
+  int smoothness = 2;
   // Which were given (a coefficient file refuses them; a conventional
   // filter named alone means the conventional method).
   bool generator_given = false, method_given = false, boundary_given = false;
   bool lattice_given = false, density_given = false;
   bool rule_given = false, iterations_given = false;  // a grid input refuses them
+  bool lambda_given = false, smoothness_given = false;
 };
 
 // An output size as oiiotool's --resize spells it: "WxH", "W" (the height

@@ -27,6 +27,7 @@ Example::
 
 from __future__ import annotations
 
+import math
 import numbers
 import os
 import warnings as _warnings
@@ -130,6 +131,22 @@ def _whole(name: str, value, limits=_INT_RANGE) -> int:
     if not limits[0] <= v <= limits[1]:
         raise ValueError(f"{name}={v}: out of range ({limits[0]} to {limits[1]})")
     return v
+
+
+def _lambda(value) -> Optional[str]:
+    """The variational rule's lambda_: None, "gcv" or a finite real >= 0, as --lambda spells it."""
+    if value is None:
+        return None
+    if isinstance(value, str):
+        if value == "gcv":
+            return value
+        raise ValueError(f"lambda_={value!r}: expected 'gcv' or a finite number >= 0")
+    if _is_bool(value) or not isinstance(value, numbers.Real):
+        raise _wrong("lambda_", value, "'gcv' or a finite number >= 0")
+    v = float(value)
+    if not (math.isfinite(v) and v >= 0):
+        raise ValueError(f"lambda_={v}: expected 'gcv' or a finite number >= 0")
+    return repr(v)
 
 
 def _number(name: str, value, optional: bool = False) -> Optional[float]:
@@ -268,13 +285,15 @@ def _grey(input, positions=None) -> bool:
 def _form(input, coefficients_only, *, size, output_shape, factor, generator, method, display,
           boundary, lattice, density, nonfinite, prefilter, clamp, highlight_compress, threads,
           input_transfer, positions=None, weights=None, rule=None, iterations=None,
-          pyramid=False):
+          lambda_=None, smoothness=None, pyramid=False):
     factor_spelling = "" if factor is None else str(factor)  # as given, for messages
     density_spelling = "" if density is None else str(density)
     factor = _number("factor", factor, optional=True)
     density = _number("density", density, optional=True)
     rule = _text("rule", rule, optional=True)
     iterations = None if iterations is None else _whole("iterations", iterations)
+    lambda_ = _lambda(lambda_)
+    smoothness = None if smoothness is None else _whole("smoothness", smoothness)
     if positions is None:
         if weights is not None:
             raise ValueError("weights= goes with positions= (the area each scattered sample "
@@ -306,7 +325,8 @@ def _form(input, coefficients_only, *, size, output_shape, factor, generator, me
         threads=_threads(threads),
         coefficients_only=coefficients_only,
         input_transfer=_text("input_transfer", input_transfer),
-        positions=p, weights=w, rule=rule, iterations=iterations, pyramid=pyramid)
+        positions=p, weights=w, rule=rule, iterations=iterations, lambda_=lambda_,
+        smoothness=smoothness, pyramid=pyramid)
     for w in result[2]:
         _warnings.warn(w, RuntimeWarning, stacklevel=3)
     return result
@@ -320,7 +340,8 @@ def project(input: Input, *, size: Optional[Size] = None,
             nonfinite: str = "error",
             prefilter: str = "fft", clamp: str = "none", highlight_compress: bool = False,
             threads: int = 0, input_transfer: str = "auto", positions=None, weights=None,
-            rule: Optional[str] = None, iterations: Optional[int] = None) -> np.ndarray:
+            rule: Optional[str] = None, iterations: Optional[int] = None,
+            lambda_=None, smoothness: Optional[int] = None) -> np.ndarray:
     """The final image of a render, as siproject forms it.
 
     input: a file path (any image OpenImageIO reads, streamed in bands as
@@ -360,7 +381,10 @@ def project(input: Input, *, size: Optional[Size] = None,
         weights: (N,), the area in output pixels^2 each sample stands for
         (None: the frame's area / N each). rule: "fit" (weighted least
         squares, None's default), "normalised" or "plain", as siproject's
-        --rule; iterations: the fit's (None: 5), --iterations. A file with
+        --rule, or "variational" (the smoothing spline); iterations: the
+        fit's (None: 5), --iterations; lambda_: the variational rule's
+        smoothness weight, a number >= 0 or "gcv" (None's default), --lambda;
+        smoothness: its functional's order, 1 or 2 (None: 2). A file with
         position channels (pFilm.x, pFilm.y) is projected so without
         positions=.
 
@@ -374,7 +398,8 @@ def project(input: Input, *, size: Optional[Size] = None,
                         nonfinite=nonfinite, prefilter=prefilter, clamp=clamp,
                         highlight_compress=highlight_compress, threads=threads,
                         input_transfer=input_transfer, positions=positions, weights=weights,
-                        rule=rule, iterations=iterations)
+                        rule=rule, iterations=iterations, lambda_=lambda_,
+                        smoothness=smoothness)
     return image[:, :, 0] if _grey(input, positions) else image
 
 
@@ -421,7 +446,8 @@ def coefficients(input: Input, *, size: Optional[Size] = None,
                  nonfinite: str = "error", prefilter: str = "fft",
                  highlight_compress: bool = False, threads: int = 0,
                  input_transfer: str = "auto", positions=None, weights=None,
-                 rule: Optional[str] = None, iterations: Optional[int] = None) -> "Coefficients":
+                 rule: Optional[str] = None, iterations: Optional[int] = None,
+                 lambda_=None, smoothness: Optional[int] = None) -> "Coefficients":
     """The coefficients of the approximation, with their space.
 
     The keywords are project()'s (there is no display or clamp: those apply
@@ -436,7 +462,8 @@ def coefficients(input: Input, *, size: Optional[Size] = None,
                     lattice=lattice, density=density, nonfinite=nonfinite,
                     prefilter=prefilter, clamp="none", highlight_compress=highlight_compress,
                     threads=threads, input_transfer=input_transfer, positions=positions,
-                    weights=weights, rule=rule, iterations=iterations)
+                    weights=weights, rule=rule, iterations=iterations, lambda_=lambda_,
+                    smoothness=smoothness)
     return Coefficients(k, grey=_grey(input, positions))
 
 
