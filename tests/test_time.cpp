@@ -137,6 +137,31 @@ TEST(Time, PolynomialsReproducedInTheInterior) {
   }
 }
 
+// The weights of a frame decay away from its shutter by the largest
+// prefilter pole per step: the share of sum |u_k| beyond J steps is below
+// |z|^J (the window a streaming front end keeps, docs/design.md section 15).
+TEST(Time, WeightsDecayAwayFromTheShutter) {
+  std::vector<double> t;
+  for (int k = 0; k < 400; ++k) t.push_back((k + 0.5) / 100.0);
+  const double fps = 25;
+  for (int D = 1; D <= 3; ++D) {
+    TimeProjection p(t, D, 1 / fps);
+    const Shutter s = box(180, 0);
+    const std::vector<double> u = frame_weights(p, s, 2.0, fps);
+    const double z = std::abs(bspline_prefilter_poles(D)[0]);
+    for (int J : {10, 14}) {
+      double tail = 0, total = 0;
+      for (size_t k = 0; k < t.size(); ++k) {
+        const double d = std::max(s.open(2.0, fps) - t[k], t[k] - s.close(2.0, fps)) * fps;
+        total += std::abs(u[k]);
+        if (d >= J) tail += std::abs(u[k]);
+      }
+      EXPECT_LT(tail / total, std::pow(z, J)) << "D " << D << " J " << J;
+      EXPECT_GT(tail, 0) << "D " << D << " J " << J;
+    }
+  }
+}
+
 TEST(Time, BadTimesAndShuttersAreRefused) {
   EXPECT_THROW(check_times({1.0}), std::invalid_argument);
   EXPECT_THROW(check_times({0.0, 0.0}), std::invalid_argument);
