@@ -117,9 +117,11 @@ TEST(Time, StaticSceneGivesTheSpatialResult) {
   }
 }
 
-// Polynomials of degree <= D are reproduced in the interior, up to the
-// quadrature of point samples in time (dense uniform sub-frames, 16 per step:
-// the midpoint rule's error is O(h^2) with h = S/16).
+// Polynomials of degree <= D are reproduced in the interior: constants
+// exactly (to rounding), higher degrees up to the hold of each sub-frame over
+// its cell (16 uniform sub-frames per step; measured at most 8.6e-5 for
+// D = 3 on values of size 1, 4.7e-7 for D = 1; 2e-4 leaves room for rounding
+// of the platform's libm only, the hold's error itself being deterministic).
 TEST(Time, PolynomialsReproducedInTheInterior) {
   const double S = 0.1;
   const std::vector<double> t = centres(0, S, 24, 16);
@@ -132,7 +134,7 @@ TEST(Time, PolynomialsReproducedInTheInterior) {
       double worst = 0;
       for (double x = 0.8; x <= 1.6; x += 0.0137)
         worst = std::max(worst, std::abs(model(p, c, x) - std::pow(x / 2.4 - 0.5, n) * 2));
-      EXPECT_LT(worst, n == 0 && D == 0 ? 1e-13 : 1e-3) << "D " << D << " n " << n;
+      EXPECT_LT(worst, n == 0 ? 1e-13 : 2e-4) << "D " << D << " n " << n;
     }
   }
 }
