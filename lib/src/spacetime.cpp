@@ -5,6 +5,8 @@
 #include <map>
 #include <sstream>
 
+#include <OpenImageIO/imageio.h>
+
 #include "sis/imageio.h"
 
 namespace sis {
@@ -20,6 +22,20 @@ std::string num(double x) {
 
 double subframe_time(const std::string& path) {
   ImageReader reader(path);
+  {
+    // a number-typed attribute (oiiotool --attrib types numbers) read as
+    // its number: its text holds 6 digits only
+    auto in = OIIO::ImageInput::open(path);
+    const OIIO::ParamValue* p = in ? in->spec().find_attribute("sis:time") : nullptr;
+    if (p && (p->type() == OIIO::TypeDesc::FLOAT || p->type() == OIIO::TypeDesc::DOUBLE ||
+              p->type() == OIIO::TypeDesc::INT)) {
+      const double v = p->type() == OIIO::TypeDesc::DOUBLE ? p->get<double>()
+                       : p->type() == OIIO::TypeDesc::INT  ? double(p->get_int())
+                                                           : double(p->get_float());
+      if (!std::isfinite(v)) throw InputError(path + ": sis:time is not finite");
+      return v;
+    }
+  }
   const std::string text = reader.attribute("sis:time");
   if (text.empty())
     throw InputError(path + ": no sis:time attribute (the sub-frame's time in seconds); give "
