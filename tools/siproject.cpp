@@ -27,6 +27,7 @@
 #include "sis/sequence.h"
 #include "sis/settings.h"
 #include "sis/space.h"
+#include "sis/spacetime.h"
 
 namespace fs = std::filesystem;
 using namespace sis;
@@ -90,6 +91,12 @@ struct Options {
   bool display_given = false, clamp_given = false;
   // --mip: a tiled, MIP-mapped OpenEXR of every level (sis/pyramid.h)
   bool mip = false;
+  // --fps: space-time projection of sub-frames (sis/spacetime.h)
+  std::optional<double> fps;
+  std::string shutter = "180:0", shutter_curve = "box", times;
+  int time_degree = 1;
+  double time_step = 0;
+  bool time_given = false;  // a temporal option given (they need --fps)
 };
 
 using Clock = std::chrono::steady_clock;
@@ -631,10 +638,132 @@ std::vector<Job> plan_jobs(const Options& o) {
   return jobs;
 }
 
+// siproject --fps: the sub-frames (the inputs, patterns expanded) projected
+// in space and time; every output frame (--frames, else every whole frame
+// inside the sub-frames' span) written to -o's pattern or folder. Everything
+// is checked before a sample is read; a failure while forming removes the
+// frames already written.
+int run_spacetime(const Options& o) {
+  if (o.verbose && o.quiet) throw UsageError("-v and -q exclude each other");
+  if (o.bands || o.merge || o.partial || o.mip || !o.coeffs.empty())
+    throw UsageError("--fps: --bands, --merge, --partial, --mip and --coeffs are not taken with "
+                     "sub-frames");
+  Options in = o;
+  in.frames.clear();  // --frames numbers the output frames here
+  std::vector<std::string> paths;
+  for (const Frame& f : expand_inputs(in)) paths.push_back(f.path);
+  SpaceTimeOptions so;
+  so.fps = *o.fps;
+  try {
+    so.shutter = parse_shutter(o.shutter, o.shutter_curve);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  so.degree = o.time_degree;
+  so.step = o.time_step;
+  if (!o.frames.empty()) {
+    try {
+      so.frames = parse_frame_range(o.frames);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--frames: ") + e.what());
+    }
+  }
+  std::vector<double> times;
+  if (!o.times.empty()) {
+    std::stringstream list(o.times);
+    std::string item;
+    while (std::getline(list, item, ',')) {
+      std::size_t used = 0;
+      double v = 0;
+      try {
+        v = std::stod(item, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || used != item.size())
+        throw UsageError("--times: '" + item + "' is not a number");
+      times.push_back(v);
+    }
+  }
+  const Resolved r = resolve(o.settings);
+  const SpaceTimePlan plan = plan_frames(paths, times, so, r);
+  // where each frame goes, decided (and checked) before anything is formed
+  const Target out = target_of(o.output, "-o", o.framepadding);
+  std::vector<std::string> dest;
+  for (long f : plan.frames) {
+    if (out.kind == Target::Pattern) {
+      dest.push_back(out.pattern->name(f));
+    } else if (out.kind == Target::Folder) {
+      char name[64];
+      std::snprintf(name, sizeof name, "frame.%04ld.exr", f);
+      dest.push_back((fs::path(out.path) / name).string());
+    } else if (plan.frames.size() == 1) {
+      dest.push_back(o.output);
+    } else {
+      throw UsageError("-o " + o.output + ": " + std::to_string(plan.frames.size()) +
+                       " output frames: give a pattern with a frame wildcard (out.#.exr) or a "
+                       "folder (its frame.NNNN.exr)");
+    }
+  }
+  for (const std::string& d : dest) {
+    check_output(d);
+    for (const std::string& p : paths)
+      if (same_file(p, d)) throw UsageError("-o: " + d + " would be written over a sub-frame");
+  }
+  std::optional<SampleFormat> data_format;
+  if (!o.data_format.empty()) {
+    try {
+      data_format = parse_sample_format(o.data_format);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("-d/--data-format: ") + e.what());
+    }
+  }
+  std::vector<std::string> written;
+  try {
+    std::size_t j = 0;
+    form_frames(o.settings, r, plan, [&](SpaceTimeFrame& f) {
+      const std::string& path = dest[j++];
+      const SampleFormat format = data_format ? *data_format : default_sample_format(path, false, 0);
+      const Metadata md = {
+          {"sis:method", f.coefficients.min_error ? "min-error" : "conventional"},
+          {"sis:generator", generator_name(f.coefficients)},
+          {"sis:display", f.display.name()},
+          {"sis:boundary", boundary_name(f.coefficients.boundary)},
+          {"sis:lattice", space_name(f.coefficients.space)},
+          {"sis:clamp", clamp_name(r.clamp)},
+          {"sis:time", metadata_number(f.time)},
+          {"sis:fps", metadata_number(so.fps)},
+          {"sis:shutter", o.shutter},
+          {"sis:shutter_curve", o.shutter_curve},
+          {"sis:time_degree", std::to_string(so.degree)},
+          {"sis:time_step", metadata_number(plan.options.step)},
+          {"sis:input", paths.front() + " and " + std::to_string(paths.size() - 1) + " more sub-frames"},
+          {"Software", "siproject"},
+      };
+      WriteOptions how(format);
+      StagedFile file = stage_image(path, f.final.image, f.channel_names, md, f.alpha, how);
+      file.commit();
+      written.push_back(path);
+      if (o.verbose)
+        std::fprintf(stderr, "siproject: frame %ld (t = %g s) -> %s\n", f.number, f.time,
+                     path.c_str());
+    });
+  } catch (...) {
+    std::error_code ec;
+    for (const std::string& w : written) fs::remove(w, ec);
+    throw;
+  }
+  return 0;
+}
+
 // Runs the jobs one after another, each on every thread (the engine's
 // bands), stopping at the first that fails (the frames before it are
 // written whole; the failing one leaves nothing).
 int run_jobs(const Options& o) {
+  if (o.fps) return run_spacetime(o);
+  if (o.time_given)
+    throw UsageError("--shutter, --shutter-curve, --time-degree, --time-step and --times need "
+                     "--fps (the output frame rate of a space-time projection)");
   const std::vector<Job> jobs = plan_jobs(o);
   for (std::size_t i = 0; i < jobs.size(); ++i) {
     Options one = o;
@@ -690,10 +819,30 @@ int main(int argc, char** argv) try {
   app.add_option("--frames", o.frames,
                  "frames of the input patterns without a range in their name, as oiiotool: "
                  "1-10, 10-1, 1-10x2 (every 2nd), 1-10y2 (the others), 3,4,10-20x2 [default: the "
-                 "files on disk that match]");
+                 "files on disk that match]; with --fps the output frames' numbers [default: every "
+                 "whole frame whose shutter lies inside the sub-frames' span]");
   app.add_option("--framepadding", o.framepadding,
                  "digits of the frame numbers of # and @ patterns [default: 4 per #, 1 per @]")
       ->check(CLI::Range(1, 18));
+  auto* fps = app.add_option("--fps", o.fps,
+                             "space-time projection: the inputs are sub-frames (times from their "
+                             "sis:time attribute or --times), projected onto spatial x temporal "
+                             "B-splines; output frames at this rate (frame k at k/R s), --frames "
+                             "their numbers, -o a pattern (out.#.exr) or folder");
+  auto* t1 = app.add_option("--shutter", o.shutter,
+                            "with --fps: shutter ANGLE[:PHASE] in degrees, open on "
+                            "[T + P/360/R, T + (P+A)/360/R)")->capture_default_str();
+  auto* t2 = app.add_option("--shutter-curve", o.shutter_curve,
+                            "with --fps: box, tent, cubic, or FILE of two columns (time in [0, 1] "
+                            "across the open shutter, weight)")->capture_default_str();
+  auto* t3 = app.add_option("--time-degree", o.time_degree,
+                            "with --fps: degree 0..3 of the temporal B-spline")->capture_default_str();
+  auto* t4 = app.add_option("--time-step", o.time_step,
+                            "with --fps: temporal lattice step in seconds [default: 1/fps]");
+  auto* t5 = app.add_option("--times", o.times,
+                            "with --fps: the sub-frames' times t0,t1,... in seconds (one per input), "
+                            "instead of their sis:time attributes");
+  (void)fps;
   app.add_flag("--mip", o.mip,
                "write -o (.exr) as a tiled, MIP-mapped OpenEXR texture: every level (maketx's "
                "sizes, each halving, down to 1x1) projected from the samples onto the space at "
@@ -833,6 +982,7 @@ int main(int argc, char** argv) try {
   if (const auto code = sis::cli::parse(app, argc, argv)) return *code;
   o.display_given = app.count("--display") > 0;
   o.clamp_given = app.count("--clamp") > 0;
+  o.time_given = t1->count() + t2->count() + t3->count() + t4->count() + t5->count() > 0;
   remove_staged_files_on_signals();
   Settings& st = o.settings;
   st.generator_given = g->count() > 0;

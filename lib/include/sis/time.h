@@ -1,0 +1,106 @@
+#pragma once
+// Time: the temporal half of the separable space-time generator
+// (docs/design.md section "Space and time"). The generator is the spatial
+// generator times a temporal B-spline b_D(t/S - m) of degree D (0..3) on a
+// temporal lattice of step S seconds. Sub-frames are point samples in time;
+// everything here is linear, so an output frame is a weighted sum of the
+// sub-frames' spatial coefficients, with the weights computed here once per
+// output frame (plan), independent of the image.
+#include <string>
+#include <vector>
+
+namespace sis {
+
+constexpr int kMaxTimeDegree = 3;
+
+enum class ShutterCurve { Box, Tent, Cubic, Table };
+
+// A shutter: open on [T + phase/360/fps, T + (phase+angle)/360/fps) for the
+// output frame at time T, with a weight curve over the open interval.
+struct Shutter {
+  double angle = 180;  // degrees, in (0, 360]
+  double phase = 0;    // degrees
+  ShutterCurve curve = ShutterCurve::Box;
+  // Table: u in [0, 1] across the open shutter (increasing) and weight >= 0,
+  // interpolated linearly, zero outside [u_first, u_last].
+  std::vector<double> table_u, table_weight;
+
+  // Throws when the angle is outside (0, 360] or the table is malformed.
+  void check() const;
+  // Open interval [open, close) of the frame at time T.
+  double open(double T, double fps) const;
+  double close(double T, double fps) const;
+  // Weight at time t of the frame at time T (zero outside the interval).
+  double weight(double t, double T, double fps) const;
+  // Breakpoints of the weight (its pieces are polynomials of degree <= 3).
+  std::vector<double> breakpoints(double T, double fps) const;
+};
+
+// "box" | "tent" | "cubic"; anything else is read as a table file of two
+// columns (u, weight); throws naming the file on a bad or missing table.
+Shutter parse_shutter(const std::string& angle_phase, const std::string& curve);
+
+// Quadrature weights of the sub-frame times t (increasing, at least two): each
+// sub-frame's own cell, between the midpoints to its neighbours; the first and
+// last cells extend by half the neighbouring gap. Sum = the span b - a.
+std::vector<double> time_quadrature_weights(const std::vector<double>& t);
+// The span [a, b] covered by the cells.
+void time_span(const std::vector<double>& t, double& a, double& b);
+
+// Throws when the times are too few, non-finite, not increasing or duplicated.
+void check_times(const std::vector<double>& t);
+
+// The temporal projection of K sub-frames at times t onto the degree-D
+// B-splines of step S: coefficients m = first .. first+count-1 (every
+// B-spline whose support meets the span). Acquisition
+//   c~[m] = (1/S) sum_k f(t_k) integral over cell k of b_D(t/S - m) dt,
+// each sub-frame held over its own cell (time_quadrature_weights; a constant
+// in time is exact for uneven times), the cells mirrored about both ends of
+// the span (exact while the span is longer than a B-spline support); then the
+// prefilter: the Gram system sum_n a[m-n] c[n] = c~[m] (a = autocorrelation
+// of b_D), indices outside the range folded back by the mirror rule
+// (c[first-1-j] = c[first+j]), solved exactly (banded LU).
+class TimeProjection {
+ public:
+  TimeProjection(std::vector<double> times, int degree, double step);
+  const std::vector<double>& times() const { return t_; }
+  int degree() const { return degree_; }
+  double step() const { return step_; }
+  int first() const { return first_; }
+  int count() const { return count_; }
+  // matrix()[m - first][k]: coefficient m's weight of sub-frame k.
+  const std::vector<std::vector<double>>& matrix() const { return P_; }
+  // Coefficients of scalar samples f(t_k).
+  std::vector<double> coefficients(const std::vector<double>& f) const;
+
+ private:
+  std::vector<double> t_;
+  int degree_;
+  double step_;
+  int first_ = 0, count_ = 0;
+  std::vector<std::vector<double>> P_;
+};
+
+// Temporal display weights of the frame at time T:
+//   w_m = integral s(t) b_D(t/S - m) dt / integral s(t) dt,
+// exact (Gauss-Legendre on each polynomial piece), for m = first..first+count-1.
+std::vector<double> display_weights(const Shutter& s, double T, double fps, int degree,
+                                    double step, int first, int count);
+
+// Sub-frame weights of the frame at time T for the space-time method:
+// u_k = sum_m w_m P[m][k]; the frame is sum_k u_k (spatial coefficients k).
+// Throws when the shutter is not inside the sub-frames' span.
+std::vector<double> frame_weights(const TimeProjection& p, const Shutter& s, double T,
+                                  double fps);
+
+// The conventional counterpart: the sub-frames whose times fall within the
+// open shutter, weighted by the curve, normalised to sum 1. Throws when no
+// sub-frame falls inside.
+std::vector<double> conventional_frame_weights(const std::vector<double>& t, const Shutter& s,
+                                               double T, double fps);
+
+// Output frames k (time k/fps) whose shutter lies inside the span [a, b].
+void default_frames(const std::vector<double>& t, const Shutter& s, double fps, int& first,
+                    int& last);
+
+}  // namespace sis
