@@ -147,6 +147,49 @@ TEST_F(SpaceTime, BitIdenticalForThreadCounts) {
   }
 }
 
+// Sub-frames tagged by oiiotool (`--attrib:type=float sis:time T`, a typed
+// float attribute, not the text this project writes) and the same
+// sub-frames timed by --times give the same frames bit for bit. The times
+// are multiples of 1/128 s, exact in float, so the float attribute holds
+// each time exactly.
+TEST_F(SpaceTime, TimesTaggedByOiiotoolAreRead) {
+  // frames 16 to 18 (times after 1 s: no negative number on oiiotool's
+  // command line)
+  std::vector<double> t = centred_times(16, 3, 4);
+  for (double& x : t) x += 1;
+  std::string times;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    ASSERT_EQ(double(float(t[k])), t[k]);
+    const std::string raw = path("raw" + std::to_string(k) + ".exr");
+    write_image(raw, random_image(12, 10, 3, 500 + k));
+    char name[32];
+    std::snprintf(name, sizeof name, "sub.%04zu.exr", k);
+    const Result r = run_tool("oiiotool", raw + " --attrib:type=float sis:time " + metadata_number(t[k]) +
+                                              " -o " + path(name));
+    ASSERT_EQ(r.status, 0) << r.output;
+    times += (k ? "," : "") + metadata_number(t[k]);
+  }
+  const Result info = run_tool("oiiotool", "--info -v " + path("sub.0004.exr"));
+  // a typed float (oiiotool prints its 6 significant digits, no quotes)
+  ASSERT_NE(info.output.find("sis:time: 1.03906\n"), std::string::npos) << info.output;
+  fs::create_directory(path("a"));
+  fs::create_directory(path("b"));
+  const std::string common = " --fps 16 --time-degree 1 --factor 2 -q -o ";
+  Result r = run_tool(kTool, subs(t.size()) + common + path("a/f.#.exr"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::string raws;
+  for (std::size_t k = 0; k < t.size(); ++k) raws += " " + path("raw" + std::to_string(k) + ".exr");
+  r = run_tool(kTool, raws + " --times " + times + common + path("b/f.#.exr"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  ASSERT_EQ(files_in(path("a")), files_in(path("b")));
+  ASSERT_GT(files_in(path("a")), 0u);
+  for (auto& e : fs::directory_iterator(path("a"))) {
+    const Image a = read_image(e.path().string());
+    const Image b = read_image(path("b/" + e.path().filename().string()));
+    EXPECT_TRUE(a.data == b.data) << e.path();
+  }
+}
+
 // Each bad sequence: a non-zero status, a message naming the file or the
 // option, and no output.
 TEST_F(SpaceTime, BadSequencesAreRefusedLeavingNothing) {

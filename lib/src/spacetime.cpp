@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <sstream>
 
 #include <OpenImageIO/imageio.h>
 
@@ -12,12 +11,8 @@
 namespace sis {
 
 namespace {
-std::string num(double x) {
-  std::ostringstream o;
-  o.precision(17);
-  o << x;
-  return o.str();
-}
+// A number in a message: as a metadata value writes it (17 digits).
+std::string num(double x) { return metadata_number(x); }
 }  // namespace
 
 double subframe_time(const std::string& path) {
