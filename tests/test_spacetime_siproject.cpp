@@ -190,6 +190,44 @@ TEST_F(SpaceTime, TimesTaggedByOiiotoolAreRead) {
   }
 }
 
+// The frames' output options are the still image's: -d half clamps values
+// past half's largest (65504) and says so, with the count and the range in
+// the metadata; --compression is the writer's; a -d the format cannot hold
+// is refused before any sub-frame is read, leaving nothing.
+TEST_F(SpaceTime, OutputOptionsAreTheStillImagesOptions) {
+  const std::vector<double> t = centred_times(24, 2, 4);
+  std::vector<Image> images;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    Image im = random_image(8, 8, 3, 700 + k);
+    for (std::size_t i = 0; i < im.data.size(); i += 3) im.data[i] = 1e5f;  // red past half's range
+    images.push_back(std::move(im));
+  }
+  write_subframes(images, t);
+  fs::create_directory(path("h"));
+  Result r = run_tool(kTool, subs(t.size()) + " --fps 24 --factor 2 -d half -o " + path("h/f.#.exr"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("-d half: 16 samples beyond +-65504 clamped there"), std::string::npos) << r.output;
+  ASSERT_EQ(files_in(path("h")), 2u);  // frames 0 and 1 (4 x 4: 16 red samples each)
+  for (const std::string& frame : {path("h/f.0000.exr"), path("h/f.0001.exr")}) {
+    const Image h = read_image(frame);
+    for (std::size_t i = 0; i < h.data.size(); i += 3) ASSERT_EQ(h.data[i], 65504.0f) << frame << " " << i;
+    EXPECT_EQ(ImageReader(frame).attribute("sis:half_clamped"), "16") << frame;
+    EXPECT_EQ(ImageReader(frame).attribute("sis:output_max"), std::to_string(65504.0)) << frame;
+  }
+
+  fs::create_directory(path("c"));
+  r = run_tool(kTool, subs(t.size()) + " --fps 24 --factor 2 -q --compression piz -o " + path("c/f.#.exr"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Result info = run_tool("oiiotool", "--info -v " + path("c/f.0000.exr"));
+  EXPECT_NE(info.output.find("compression: \"piz\""), std::string::npos) << info.output;
+
+  fs::create_directory(path("p"));
+  r = run_tool(kTool, subs(t.size()) + " --fps 24 --factor 2 -d half -o " + path("p/f.#.png"));
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("-d/--data-format half"), std::string::npos) << r.output;
+  EXPECT_EQ(files_in(path("p")), 0u);
+}
+
 // Each bad sequence: a non-zero status, a message naming the file or the
 // option, and no output.
 TEST_F(SpaceTime, BadSequencesAreRefusedLeavingNothing) {

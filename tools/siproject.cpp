@@ -269,6 +269,44 @@ int write_mip_of(const Options& o, const Resolved& r, InputSet set, SampleFormat
   return 0;
 }
 
+// -d, --compression and --quality as given for the output `path`: the
+// sample type checked against the path's format, the compression parsed.
+struct OutputOptions {
+  std::optional<SampleFormat> data_format;  // none: the input's (the still path's rule)
+  Compression compression;
+  std::string compression_option;  // the option that asked for it, as messages name it
+};
+OutputOptions output_options(const Options& o, const std::string& path) {
+  OutputOptions out;
+  if (!o.data_format.empty()) {
+    try {
+      out.data_format = parse_sample_format(o.data_format);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("-d/--data-format: ") + e.what());
+    }
+    std::string held;
+    if (!holds_format(path, *out.data_format, &held))
+      throw UsageError("-d/--data-format " + o.data_format + ": " + path + "'s format holds " +
+                       held + " samples, not " + o.data_format);
+  }
+  if (!o.compression.empty()) {
+    try {
+      out.compression = parse_compression(o.compression);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--compression ") + e.what());
+    }
+  }
+  if (o.quality) {
+    if (out.compression.quality && out.compression.quality != o.quality)
+      throw UsageError("--compression " + o.compression + " and --quality " +
+                       std::to_string(o.quality) + ": give the quality once");
+    out.compression.quality = o.quality;
+  }
+  out.compression_option =
+      !o.compression.empty() ? "--compression " + o.compression : "--quality " + std::to_string(o.quality);
+  return out;
+}
+
 int run(const Options& o) {
   const auto t_start = Clock::now();
   if (o.verbose && o.quiet) throw UsageError("-v and -q exclude each other");
@@ -289,35 +327,10 @@ int run(const Options& o) {
     if (!o.coeffs.empty() && same_file(in, o.coeffs))
       throw UsageError("--coeffs " + o.coeffs + " is the input file");
   }
-  std::optional<SampleFormat> data_format;
-  if (!o.data_format.empty()) {
-    try {
-      data_format = parse_sample_format(o.data_format);
-    } catch (const std::invalid_argument& e) {
-      throw UsageError(std::string("-d/--data-format: ") + e.what());
-    }
-    std::string held;
-    if (!holds_format(o.output, *data_format, &held))
-      throw UsageError("-d/--data-format " + o.data_format + ": " + o.output + "'s format holds " +
-                       held + " samples, not " + o.data_format);
-  }
-  Compression compression;
-  if (!o.compression.empty()) {
-    try {
-      compression = parse_compression(o.compression);
-    } catch (const std::invalid_argument& e) {
-      throw UsageError(std::string("--compression ") + e.what());
-    }
-  }
-  if (o.quality) {
-    if (compression.quality && compression.quality != o.quality)
-      throw UsageError("--compression " + o.compression + " and --quality " +
-                       std::to_string(o.quality) + ": give the quality once");
-    compression.quality = o.quality;
-  }
-  // the option that asked for the compression, as messages name it
-  const std::string compression_option =
-      !o.compression.empty() ? "--compression " + o.compression : "--quality " + std::to_string(o.quality);
+  const OutputOptions out = output_options(o, o.output);
+  const std::optional<SampleFormat>& data_format = out.data_format;
+  const Compression& compression = out.compression;
+  const std::string& compression_option = out.compression_option;
   if (!o.coeffs.empty() && same_file(o.output, o.coeffs))
     throw UsageError("--coeffs " + o.coeffs + " is the output file");
   for (const std::string& path : {o.output, o.coeffs}) {
@@ -710,20 +723,24 @@ int run_spacetime(const Options& o) {
     for (const std::string& p : paths)
       if (same_file(p, d)) throw UsageError("-o: " + d + " would be written over a sub-frame");
   }
-  std::optional<SampleFormat> data_format;
-  if (!o.data_format.empty()) {
-    try {
-      data_format = parse_sample_format(o.data_format);
-    } catch (const std::invalid_argument& e) {
-      throw UsageError(std::string("-d/--data-format: ") + e.what());
-    }
-  }
+  const OutputOptions options = output_options(o, dest.front());
   std::vector<std::string> written;
   try {
     std::size_t j = 0;
     form_frames(o.settings, r, plan, [&](SpaceTimeFrame& f) {
       const std::string& path = dest[j++];
-      const SampleFormat format = data_format ? *data_format : default_sample_format(path, false, 0);
+      SampleFormat format = options.data_format ? *options.data_format : default_sample_format(path, false, 0);
+      if (!options.compression.name.empty() || options.compression.quality) {
+        try {
+          check_write_options(path, int(f.channel_names.size()), format, options.compression);
+        } catch (const std::invalid_argument& e) {
+          throw UsageError(options.compression_option + ": " + path + ": " + e.what());
+        }
+      }
+      long half_clamped = 0;
+      RangeReport after = f.final.after;
+      if (fit_half(format, bool(options.data_format), after, {&f.final.image}, o.quiet, half_clamped))
+        after = report_range(f.final.image, nullptr, r.threads);
       const Metadata md = {
           {"sis:method", f.coefficients.min_error ? "min-error" : "conventional"},
           {"sis:generator", generator_name(f.coefficients)},
@@ -731,6 +748,9 @@ int run_spacetime(const Options& o) {
           {"sis:boundary", boundary_name(f.coefficients.boundary)},
           {"sis:lattice", space_name(f.coefficients.space)},
           {"sis:clamp", clamp_name(r.clamp)},
+          {"sis:output_min", std::to_string(after.min)},
+          {"sis:output_max", std::to_string(after.max)},
+          {"sis:half_clamped", std::to_string(half_clamped)},
           {"sis:time", metadata_number(f.time)},
           {"sis:fps", metadata_number(so.fps)},
           {"sis:shutter", o.shutter},
@@ -741,6 +761,7 @@ int run_spacetime(const Options& o) {
           {"Software", "siproject"},
       };
       WriteOptions how(format);
+      how.compression = options.compression;
       StagedFile file = stage_image(path, f.final.image, f.channel_names, md, f.alpha, how);
       file.commit();
       written.push_back(path);
