@@ -115,7 +115,7 @@ SpaceTimePlan plan_frames(const std::vector<std::string>& paths, std::vector<dou
   } else {
     p.frames = options.frames;
   }
-  const TimeProjection tp(times, options.degree, p.options.step);
+  const TimeProjection tp(times, options.degree, p.options.step, options.model);
   for (long f : p.frames) {
     const double T = f / options.fps;
     std::vector<double> u;

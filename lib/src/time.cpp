@@ -199,8 +199,82 @@ std::vector<double> time_quadrature_weights(const std::vector<double>& t) {
   return q;
 }
 
-TimeProjection::TimeProjection(std::vector<double> times, int degree, double step)
-    : t_(std::move(times)), degree_(degree), step_(step) {
+const char* time_model_name(TimeModel model) {
+  switch (model) {
+    case TimeModel::Hold: return "hold";
+    case TimeModel::Linear: return "linear";
+    case TimeModel::Cubic: return "cubic";
+  }
+  return "?";
+}
+
+TimeModel parse_time_model(const std::string& spelling) {
+  if (spelling == "hold") return TimeModel::Hold;
+  if (spelling == "linear") return TimeModel::Linear;
+  if (spelling == "cubic") return TimeModel::Cubic;
+  throw std::invalid_argument("--time-model: '" + spelling +
+                              "' is not a model (hold, linear or cubic)");
+}
+
+namespace {
+
+// Acquisition of the Linear and Cubic models: A[i][k] = (1/S) integral over
+// [a, b] of L_k(t) (b_D(t/S - m) + b_D((2a - t)/S - m) + b_D((2b - t)/S - m)) dt
+// for m = first + i, the model's pieces [t_k, t_k+1] (and the end cells
+// [a, t_0], [t_K-1, b] on the nearest gap's polynomial), L_k the Lagrange
+// basis of the piece's nodes. Each piece of the integrand is a polynomial of
+// degree <= 3 + 3 between the B-splines' knots: gauss4 is exact.
+void acquire_interpolated(const std::vector<double>& t, double a, double b, int degree,
+                          double step, int first, int count, TimeModel model,
+                          std::vector<std::vector<double>>& A) {
+  const int K = static_cast<int>(t.size());
+  const int q = model == TimeModel::Linear ? 1 : std::min(3, K - 1);  // nodes q + 1
+  const double r = 0.5 * (degree + 1);
+  for (int piece = -1; piece < K; ++piece) {
+    // piece -1: [a, t_0]; piece k: [t_k, t_k+1]; piece K-1: [t_K-1, b]
+    const double lo = piece < 0 ? a : t[piece];
+    const double hi = piece + 1 >= K ? b : t[piece + 1];
+    if (!(hi > lo)) continue;
+    const int gap = std::clamp(piece, 0, K - 2);                  // the gap whose polynomial
+    const int j0 = std::clamp(gap - (q - 1) / 2, 0, K - 1 - q);  // nodes j0 .. j0 + q
+    auto basis = [&](int k, double x) {
+      double v = 1;
+      for (int j = j0; j <= j0 + q; ++j)
+        if (j != k) v *= (x - t[j]) / (t[k] - t[j]);
+      return v;
+    };
+    for (int i = 0; i < count; ++i) {
+      const int m = first + i;
+      // the three images of b_D's support that may meet [lo, hi]
+      const double s0 = step * (m - r), s1 = step * (m + r);
+      const bool direct = s1 > lo && s0 < hi;
+      const bool left = 2 * a - s0 > lo && 2 * a - s1 < hi;
+      const bool right = 2 * b - s0 > lo && 2 * b - s1 < hi;
+      if (!direct && !left && !right) continue;
+      std::vector<double> bp;
+      for (int j = 0; j <= degree + 1; ++j) {
+        const double knot = step * (m - r + j);
+        bp.push_back(knot);
+        bp.push_back(2 * a - knot);
+        bp.push_back(2 * b - knot);
+      }
+      auto kernel = [&](double x) {
+        return bspline(degree, x / step - m) + bspline(degree, (2 * a - x) / step - m) +
+               bspline(degree, (2 * b - x) / step - m);
+      };
+      for (int k = j0; k <= j0 + q; ++k)
+        A[i][k] += piecewise_integral([&](double x) { return basis(k, x) * kernel(x); }, lo, hi,
+                                      bp) /
+                   step;
+    }
+  }
+}
+
+}  // namespace
+
+TimeProjection::TimeProjection(std::vector<double> times, int degree, double step,
+                               TimeModel model)
+    : t_(std::move(times)), degree_(degree), step_(step), model_(model) {
   if (degree < 0 || degree > kMaxTimeDegree)
     throw std::invalid_argument("TimeProjection(): time degree " + std::to_string(degree) +
                                 " outside [0, 3]");
@@ -219,7 +293,9 @@ TimeProjection::TimeProjection(std::vector<double> times, int degree, double ste
   // about a and b; (1/S) integral of b_D(t/S - m) over a cell, exactly, from
   // the cumulative B-spline
   std::vector<std::vector<double>> A(count_, std::vector<double>(K, 0.0));
-  for (int i = 0; i < count_; ++i) {
+  if (model_ != TimeModel::Hold)
+    acquire_interpolated(t_, a, b, degree, step, first_, count_, model_, A);
+  for (int i = 0; i < count_ && model_ == TimeModel::Hold; ++i) {
     const int m = first_ + i;
     auto cell = [&](double lo, double hi) {
       return bspline_cumulative(degree, hi / step - m) - bspline_cumulative(degree, lo / step - m);

@@ -18,6 +18,7 @@ struct SpaceTimeOptions {
   Shutter shutter;          // open on [T + P/360/fps, T + (P + A)/360/fps)
   int degree = 1;           // temporal B-spline degree, 0..3
   double step = 0;          // temporal lattice step in seconds (0: 1/fps)
+  TimeModel model = TimeModel::Hold;  // the sub-frames' model in the acquisition
   std::vector<long> frames; // output frame numbers, time k/fps (empty: every whole frame inside)
 };
 
