@@ -93,8 +93,8 @@ struct Options {
   bool mip = false;
   // --fps: space-time projection of sub-frames (sis/spacetime.h)
   std::optional<double> fps;
-  std::string shutter = "180:0", shutter_curve = "box", times, time_model = "hold";
-  int time_degree = 1;
+  std::string shutter = "180:0", shutter_curve = "box", times, time_model = "cubic";
+  int time_degree = 3;
   double time_step = 0;
   bool time_given = false;  // a temporal option given (they need --fps)
 };
@@ -865,7 +865,8 @@ int main(int argc, char** argv) try {
   auto* t3 = app.add_option("--time-degree", o.time_degree,
                             "with --fps: degree 0..3 of the temporal B-spline")->capture_default_str();
   auto* t4 = app.add_option("--time-step", o.time_step,
-                            "with --fps: temporal lattice step in seconds [default: 1/fps]");
+                            "with --fps: temporal lattice step in seconds [default: the sub-frames' mean "
+                            "spacing]");
   auto* t6 = app.add_option("--time-model", o.time_model,
                             "with --fps: how the sub-frames stand for the scene between their "
                             "times in the temporal acquisition: hold (each over its own cell), "
