@@ -7,7 +7,9 @@
 #   make compare-samples  the sample patterns compared: out/report/samples/
 #   make render      the render of SCENE alone (with SAMPLES, SEED...)
 #   make anim        an animation of SCENE: sub-frames, space-time frames and
-#                    videos (FRAMES, SUBFRAMES, FPS...: see "anim" below)
+#                    videos (FRAMES, SUBFRAMES, FPS...: see "anim" below);
+#                    make anim-subframes: the sub-frames alone
+#   make compare-anim  the animation study: out/report/anim/
 #   make stability   where the methods fail: out/report/stability/
 #   make bench       speed and memory against oiiotool and splineops: out/bench/
 #   make install     build, then install into PREFIX (default /usr/local):
@@ -136,7 +138,7 @@ MAKEFLAGS += --no-print-directory
 # One job at a time: POV-Ray and siproject use every core themselves, and the
 # times in the summary stay comparable. Bands (TILES > 1) are meant to run
 # in parallel.
-ifeq ($(TILES)-$(SAMPLES)-$(filter anim,$(MAKECMDGOALS)),1-regular-)
+ifeq ($(TILES)-$(SAMPLES)-$(filter anim anim-subframes,$(MAKECMDGOALS)),1-regular-)
 .NOTPARALLEL:
 endif
 .DELETE_ON_ERROR:
@@ -226,7 +228,7 @@ endif
 
 ALL_SCENES := $(sort $(basename $(notdir $(wildcard $(SCENEDIR)/*.pov))))
 ifeq ($(filter $(SCENE),$(ALL_SCENES)),)
-ifneq ($(filter all scene anim,$(or $(MAKECMDGOALS),all)),)
+ifneq ($(filter all scene anim anim-subframes,$(or $(MAKECMDGOALS),all)),)
 $(error no scene $(SCENEDIR)/$(SCENE).pov; scenes: $(ALL_SCENES))
 endif
 endif
@@ -453,7 +455,8 @@ TIME_JITTER ?=
 ANIM_METHOD ?= me-cubic
 SWEEP_V ?= 0.25
 SWEEP_PATTERN ?= zoneplate
-ifneq ($(filter anim,$(MAKECMDGOALS)),)
+ANIM_GOALS := $(filter anim anim-subframes,$(MAKECMDGOALS))
+ifneq ($(ANIM_GOALS),)
 ifneq ($(shell echo '$(FRAMES) $(SUBFRAMES)' | grep -Ex '[1-9][0-9]* [1-9][0-9]*'),$(FRAMES) $(SUBFRAMES))
 $(error FRAMES=$(FRAMES) SUBFRAMES=$(SUBFRAMES): expected positive whole numbers)
 endif
@@ -476,7 +479,7 @@ endif
 ANIM_DIR := $(OUT)/anim/$(SCENE)-$(RES_TAG)-f$(FACTOR)-$(RENDER_FPS)fps-k$(SUBFRAMES)$(if $(TIME_JITTER),-j$(TIME_JITTER))
 ANIM_COUNT := $(shell echo $$(( $(FRAMES) * $(SUBFRAMES) )))
 # NNNN:TIME, one word per sub-frame
-ANIM_PAIRS := $(if $(filter anim,$(MAKECMDGOALS)),$(shell python3 scripts/anim_times.py --frames $(FRAMES) \
+ANIM_PAIRS := $(if $(ANIM_GOALS),$(shell python3 scripts/anim_times.py --frames $(FRAMES) \
   --subframes $(SUBFRAMES) --fps $(RENDER_FPS) $(if $(TIME_JITTER),--jitter $(TIME_JITTER)) --pairs))
 sub_of = $(ANIM_DIR)/sub.$(1).exr
 anim_subs := $(foreach p,$(ANIM_PAIRS),$(call sub_of,$(firstword $(subst :, ,$(p)))))
@@ -519,7 +522,8 @@ $(ANIM_DIR)/index-$(FPS)fps.html: $(ANIM_DIR)/spacetime-$(FPS)fps.webp $(ANIM_DI
 	@$(PYTHON) scripts/anim_page.py --dir $(ANIM_DIR) --fps $(FPS) --scene $(SCENE) \
 	  --spacetime '$(anim_cmd_spacetime)' --average '$(anim_cmd_average)' -o $@
 
-.PHONY: anim
+.PHONY: anim anim-subframes
+anim-subframes: $(anim_subs)
 anim: $(if $(PREBUILT),,build) $(ANIM_DIR)/index-$(FPS)fps.html
 	@echo "anim: $(ANIM_DIR)/index-$(FPS)fps.html (videos: $(ANIM_DIR)/spacetime-$(FPS)fps.mp4, average-$(FPS)fps.mp4)"
 
@@ -703,6 +707,20 @@ docs:
 	  $(PYTHON) scripts/docs_picture.py $(OUT)/checker docs/img/methods.png && \
 	  echo "docs: docs/img/methods.png from $(OUT)/checker"; \
 	else echo "docs: no $(OUT)/checker images (run make): picture left as it is"; fi
+
+# make compare-anim [QUICK=1]: the animation study (scripts/compare_anim.py):
+# the sweep (scenes/sweep.pov, known in closed form at every time) as a slow
+# and a fast zone plate and slow bars, K = 2, 4, 8 sub-frames a frame at
+# 24 fps (make anim-subframes in $(OUT)/compare-anim), the sub-frame average
+# and space-time min-error of degrees 0, 1, 3 against the shutter's exact
+# integral, shutters of 180 and 360 degrees; frame-rate conversion 24 <-> 60
+# fps; siproject --fps's time and memory. $(OUT)/report/anim/ (QUICK:
+# $(OUT)/report-quick/anim/, 32 x 32, the slow zone plate, K = 2 and 4).
+.PHONY: compare-anim
+compare-anim: $(if $(PREBUILT),,build)
+	@PYTHONPATH=$(BUILD)/python $(PYTHON) scripts/compare_anim.py --work $(OUT)/compare-anim$(if $(QUICK),-quick) \
+	  --report $(OUT)/report$(if $(QUICK),-quick)/anim --siproject $(SIPROJECT) --jobs $(JOBS) \
+	  --zp-nyquist $(ZP_NYQUIST) $(if $(QUICK),--quick)
 
 # make compare-sparse [QUICK=1]: fewer rays than pixels (docs/studies.md):
 # the variational rule, the fit, the normalised sum and scipy's griddata of

@@ -866,7 +866,17 @@ int main(int argc, char** argv) try {
                             "with --fps: degree 0..3 of the temporal B-spline")->capture_default_str();
   auto* t4 = app.add_option("--time-step", o.time_step,
                             "with --fps: temporal lattice step in seconds [default: the sub-frames' mean "
-                            "spacing]");
+                            "spacing]")
+                ->check([](const std::string& v) {
+                  double x = 0;
+                  try {
+                    x = std::stod(v);
+                  } catch (const std::exception&) {
+                  }
+                  return x > 0 && std::isfinite(x)
+                             ? std::string()
+                             : "expected a positive number of seconds, not '" + v + "'";
+                });
   auto* t6 = app.add_option("--time-model", o.time_model,
                             "with --fps: how the sub-frames stand for the scene between their "
                             "times in the temporal acquisition: hold (each over its own cell), "
