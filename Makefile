@@ -436,8 +436,9 @@ all-scenes: $(if $(PREBUILT),,build) $(foreach s,$(ALL_SCENES),$(call summary_of
 # its time (sis:time, by oiiotool), so make -j and a make-driven farm render
 # them in parallel; then the frames at FPS by siproject --fps twice: the
 # space-time projection (ANIM_METHOD's spatial options, TIME_DEGREE,
-# TIME_MODEL, SHUTTER, SHUTTER_CURVE) and the sub-frame average within the
-# shutter (the conventional box: what averaging sub-frames gives); each
+# TIME_MODEL, SHUTTER, SHUTTER_CURVE) and, when FPS is RENDER_FPS, the
+# sub-frame average within the shutter (the conventional box: what
+# averaging sub-frames gives); each
 # encoded by ffmpeg as an MP4 (H.264) and an animated WebP, shown side by
 # side in index.html. Files in $(ANIM_DIR):
 #   sub.NNNN.exr                  the sub-frames (half, linear; sis:time)
@@ -516,11 +517,15 @@ $(ANIM_DIR)/$(1)-$(FPS)fps.mp4 $(ANIM_DIR)/$(1)-$(FPS)fps.webp &: $(anim_subs) $
 	{ rc=$$$$?; rm -rf $$$$t $$$$t.mp4 $$$$t.webp; exit $$$$rc; }
 	@printf 'frames   %-10s %-9s %s frames at %s fps -> %s\n' $(SCENE) $(1) $$$$(ls $(ANIM_DIR)/$(1)-$(FPS)fps | wc -l) $(FPS) $(ANIM_DIR)/$(1)-$(FPS)fps.mp4
 endef
-$(foreach k,spacetime average,$(eval $(call anim_rules,$(k))))
+# The average only at the rendered rate: at another rate a frame's shutter
+# may hold no sub-frame (the frame-rate conversion is the space-time
+# projection's).
+ANIM_KINDS := spacetime $(if $(filter $(FPS),$(RENDER_FPS)),average)
+$(foreach k,$(ANIM_KINDS),$(eval $(call anim_rules,$(k))))
 
-$(ANIM_DIR)/index-$(FPS)fps.html: $(ANIM_DIR)/spacetime-$(FPS)fps.webp $(ANIM_DIR)/average-$(FPS)fps.webp scripts/anim_page.py
-	@$(PYTHON) scripts/anim_page.py --dir $(ANIM_DIR) --fps $(FPS) --scene $(SCENE) \
-	  --spacetime '$(anim_cmd_spacetime)' --average '$(anim_cmd_average)' -o $@
+$(ANIM_DIR)/index-$(FPS)fps.html: $(foreach k,$(ANIM_KINDS),$(ANIM_DIR)/$(k)-$(FPS)fps.webp) scripts/anim_page.py
+	@$(PYTHON) scripts/anim_page.py --dir $(ANIM_DIR) --fps $(FPS) --render-fps $(RENDER_FPS) --scene $(SCENE) \
+	  --spacetime '$(anim_cmd_spacetime)' $(if $(filter average,$(ANIM_KINDS)),--average '$(anim_cmd_average)') -o $@
 
 .PHONY: anim anim-subframes
 anim-subframes: $(anim_subs)

@@ -19,15 +19,16 @@ def main(argv=None):
     p.add_argument("--fps", required=True)
     p.add_argument("--scene", required=True)
     p.add_argument("--spacetime", required=True)
-    p.add_argument("--average", required=True)
+    p.add_argument("--average", help="the average's options (frames at the rendered rate only)")
+    p.add_argument("--render-fps", required=True)
     p.add_argument("-o", "--output", required=True)
     a = p.parse_args(argv)
     subs = sorted(f for f in os.listdir(a.dir) if f.startswith("sub.") and f.endswith(".exr"))
     cells = []
-    for kind, opts, what in (
-        ("spacetime", a.spacetime, "space-time min-error projection"),
-        ("average", a.average, "sub-frame average within the shutter (conventional box)"),
-    ):
+    kinds = [("spacetime", a.spacetime, "space-time min-error projection")]
+    if a.average is not None:
+        kinds.append(("average", a.average, "sub-frame average within the shutter (conventional box)"))
+    for kind, opts, what in kinds:
         name = f"{kind}-{a.fps}fps"
         frames = len([f for f in os.listdir(os.path.join(a.dir, name)) if f.endswith(".png")])
         cells.append(
@@ -36,13 +37,16 @@ def main(argv=None):
             f'(<a href="{name}.mp4">MP4</a>, <a href="{name}/">PNG frames</a>)<br>'
             f"<code>siproject sub.*.exr {html.escape(opts)}</code></figcaption></figure>"
         )
+    note = (" two ways" if a.average is not None else
+            f": frame-rate conversion from {html.escape(a.render_fps)} fps, which only the space-time "
+            "projection makes (a frame's shutter may hold no sub-frame to average)")
     page = f"""<!doctype html>
 <html><head><meta charset="utf-8"><title>{html.escape(a.scene)}: animation at {html.escape(a.fps)} fps</title>
 <style>body {{ font-family: sans-serif; margin: 1.5em; }} figure {{ display: inline-block; margin: 0 1.5em 1em 0; vertical-align: top; max-width: 46%; }}
 img {{ image-rendering: pixelated; width: 100%; }} code {{ font-size: 0.85em; }}</style></head>
 <body><h1>{html.escape(a.scene)}: animation at {html.escape(a.fps)} fps</h1>
 <p>{len(subs)} sub-frames rendered by POV-Ray (<code>{html.escape(subs[0] if subs else '')}</code> ...,
-each with its time in <code>sis:time</code>), formed into frames by <code>siproject --fps</code> two ways.
+each with its time in <code>sis:time</code>) for {html.escape(a.render_fps)} fps, formed into frames by <code>siproject --fps</code>{note}.
 docs/design.md section 16 says what the space-time projection computes.</p>
 {''.join(cells)}
 </body></html>
