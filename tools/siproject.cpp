@@ -752,9 +752,15 @@ int run_spacetime(const Options& o) {
           {"sis:display", f.display.name()},
           {"sis:boundary", boundary_name(f.coefficients.boundary)},
           {"sis:lattice", space_name(f.coefficients.space)},
+          {"sis:input_transfer", f.coefficients.input.transfer.name()},
+          {"sis:highlight_compress", f.coefficients.highlight_compressed ? "1" : "0"},
           {"sis:clamp", clamp_name(r.clamp)},
           {"sis:output_min", std::to_string(after.min)},
           {"sis:output_max", std::to_string(after.max)},
+          {"sis:negative_before_clamp", std::to_string(f.final.before.negative)},
+          {"sis:out_of_range_before_clamp", f.final.own_range
+                                                 ? std::to_string(f.final.before.out_of_range)
+                                                 : std::string("unknown")},
           {"sis:half_clamped", std::to_string(half_clamped)},
           {"sis:time", metadata_number(f.time)},
           {"sis:fps", metadata_number(so.fps)},

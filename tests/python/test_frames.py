@@ -119,3 +119,8 @@ def test_siprojects_frames_are_the_weights_applied_to_the_stills(tmp_path):
                         text=True).stdout
     assert 'sis:time_model: "cubic"' in md
     assert 'sis:time_degree: "3"' in md
+    # the still image's keys too (docs/siproject.md, Range report)
+    for key in ("sis:input_transfer", "sis:highlight_compress", "sis:negative_before_clamp",
+                "sis:out_of_range_before_clamp", "sis:output_min", "sis:clamp"):
+        assert key + ":" in md, key
+    assert 'sis:input_transfer: "linear"' in md
