@@ -708,6 +708,10 @@ docs:
 	  $(PYTHON) scripts/readme_section.py docs/performance.md performance $(OUT)/bench/bench.md 2 && \
 	  echo "docs: docs/performance.md table from $(OUT)/bench/bench.md"; \
 	else echo "docs: no $(OUT)/bench/bench.md (run make bench): table left as it is"; fi
+	@if [ -f $(OUT)/report/anim/psnr-vs-k.png ]; then \
+	  cp $(OUT)/report/anim/psnr-vs-k.png docs/img/anim-psnr-vs-k.png && \
+	  echo "docs: docs/img/anim-psnr-vs-k.png from $(OUT)/report/anim (the numbers in docs/studies.md are written by hand)"; \
+	else echo "docs: no $(OUT)/report/anim (run make compare-anim): chart left as it is"; fi
 	@if [ -f $(OUT)/checker/me-cubic-2x2.png ]; then \
 	  $(PYTHON) scripts/docs_picture.py $(OUT)/checker docs/img/methods.png && \
 	  echo "docs: docs/img/methods.png from $(OUT)/checker"; \
