@@ -530,7 +530,7 @@ $(ANIM_DIR)/index-$(FPS)fps.html: $(foreach k,$(ANIM_KINDS),$(ANIM_DIR)/$(k)-$(F
 .PHONY: anim anim-subframes
 anim-subframes: $(anim_subs)
 anim: $(if $(PREBUILT),,build) $(ANIM_DIR)/index-$(FPS)fps.html
-	@echo "anim: $(ANIM_DIR)/index-$(FPS)fps.html (videos: $(ANIM_DIR)/spacetime-$(FPS)fps.mp4, average-$(FPS)fps.mp4)"
+	@echo "anim: $(ANIM_DIR)/index-$(FPS)fps.html (videos: $(foreach k,$(ANIM_KINDS),$(ANIM_DIR)/$(k)-$(FPS)fps.mp4))"
 
 endif
 
