@@ -3,11 +3,26 @@
 // random positions and values, and jittered samples of a smooth image.
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <random>
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
 
 #include "sis/scattered.h"
 
 namespace sis::test {
+
+// f must throw std::invalid_argument whose message contains `part`.
+inline void expect_error(const std::function<void()>& f, const std::string& part) {
+  try {
+    f();
+    ADD_FAILURE() << "no error, expected one containing '" << part << "'";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+  }
+}
 
 // Uniform in [0, 1), 53 bits.
 inline double uniform(std::mt19937_64& g) { return double(g() >> 11) * 0x1p-53; }

@@ -26,6 +26,7 @@ namespace {
 using test::dense_solve;
 using test::jittered;
 using test::random_samples;
+using test::expect_error;
 using test::smooth;
 using test::uniform;
 
@@ -387,15 +388,6 @@ TEST(Scattered, SameBitsForAnyThreadCount) {
           EXPECT_EQ(evaluate_at_samples(one, *s, threads), at_one) << threads << " threads";
         }
       }
-}
-
-void expect_error(const std::function<void()>& f, const std::string& part) {
-  try {
-    f();
-    ADD_FAILURE() << "no error, expected one containing '" << part << "'";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
-  }
 }
 
 TEST(Scattered, BadInputIsRefusedWithAClearMessage) {
