@@ -134,7 +134,7 @@ SpaceTimePlan plan_frames(const std::vector<std::string>& paths, std::vector<dou
     while (std::abs(u[lo]) < kWeightFloor * big) u[lo++] = 0;
     while (std::abs(u[hi]) < kWeightFloor * big) u[hi--] = 0;
     p.frame_times.push_back(T);
-    p.weights.push_back(std::move(u));
+    p.weights.emplace_back(u.begin() + lo, u.begin() + hi + 1);  // the window alone
     p.lo.push_back(lo);
     p.hi.push_back(hi);
   }
@@ -153,7 +153,7 @@ void form_frames(const Settings& settings, const Resolved& resolved, const Space
     for (std::size_t i = j; i < plan.frames.size(); ++i) keep_from = std::min(keep_from, plan.lo[i]);
     while (!window.empty() && window.begin()->first < keep_from) window.erase(window.begin());
     for (long k = plan.lo[j]; k <= plan.hi[j]; ++k) {
-      if (plan.weights[j][k] == 0 || window.count(k)) continue;
+      if (plan.weights[j][k - plan.lo[j]] == 0 || window.count(k)) continue;
       FormRequest fr;
       fr.keep_coefficients = true;
       fr.final_image = false;
@@ -164,7 +164,7 @@ void form_frames(const Settings& settings, const Resolved& resolved, const Space
     out.time = plan.frame_times[j];
     const Formed* any = nullptr;
     for (long k = plan.lo[j]; k <= plan.hi[j]; ++k) {
-      const double u = plan.weights[j][k];
+      const double u = plan.weights[j][k - plan.lo[j]];
       if (u == 0) continue;
       const Formed& f = window.at(k);
       if (!any) {

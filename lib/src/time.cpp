@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 
@@ -218,74 +219,149 @@ TimeModel parse_time_model(const std::string& spelling) {
 
 namespace {
 
+// The first k in [lo, hi) with pred(k) true, pred monotone (false then true);
+// hi when none.
+template <class P>
+int first_true(int lo, int hi, P pred) {
+  while (lo < hi) {
+    const int mid = lo + (hi - lo) / 2;
+    if (pred(mid)) hi = mid; else lo = mid + 1;
+  }
+  return lo;
+}
+
+}  // namespace
+
+void TimeProjection::add(int i, int k, double v) {
+  Row& row = rows_[i];
+  if (row.v.empty()) {
+    row.k0 = k;
+    row.v.push_back(v);
+    return;
+  }
+  if (k < row.k0) {
+    row.v.insert(row.v.begin(), static_cast<size_t>(row.k0 - k), 0.0);
+    row.k0 = k;
+  }
+  const size_t at = static_cast<size_t>(k - row.k0);
+  if (at >= row.v.size()) row.v.resize(at + 1, 0.0);
+  row.v[at] += v;
+}
+
 // Acquisition of the Linear and Cubic models on [lo, hi] (the span widened
 // to the B-splines' knots, lo and hi knots): A[i][k] = (1/S) integral over
 // [lo, hi] of L_k(t) b_D(t/S - m) dt for m = first + i, over the model's
 // pieces [t_k, t_k+1] (and [lo, t_0], [t_K-1, hi] on the nearest gap's
 // polynomial, extended), L_k the Lagrange basis of the piece's nodes. Each
 // piece of the integrand is a polynomial of degree <= 3 + 3 between the
-// B-spline's knots: gauss4 is exact.
-void acquire_interpolated(const std::vector<double>& t, double lo_all, double hi_all, int degree,
-                          double step, int first, int count, TimeModel model,
-                          std::vector<std::vector<double>>& A) {
+// B-spline's knots: gauss4 is exact. Only the pieces under row i's support.
+void TimeProjection::acquire_interpolated(double lo_all, double hi_all) {
+  const std::vector<double>& t = t_;
   const int K = static_cast<int>(t.size());
-  const int q = model == TimeModel::Linear ? 1 : std::min(3, K - 1);  // nodes q + 1
-  const double r = 0.5 * (degree + 1);
-  for (int piece = -1; piece < K; ++piece) {
-    // piece -1: [lo, t_0]; piece k: [t_k, t_k+1]; piece K-1: [t_K-1, hi]
-    const double lo = piece < 0 ? lo_all : t[piece];
-    const double hi = piece + 1 >= K ? hi_all : t[piece + 1];
-    if (!(hi > lo)) continue;
-    const int gap = std::clamp(piece, 0, K - 2);                  // the gap whose polynomial
-    const int j0 = std::clamp(gap - (q - 1) / 2, 0, K - 1 - q);  // nodes j0 .. j0 + q
-    auto basis = [&](int k, double x) {
-      double v = 1;
-      for (int j = j0; j <= j0 + q; ++j)
-        if (j != k) v *= (x - t[j]) / (t[k] - t[j]);
-      return v;
+  const int q = model_ == TimeModel::Linear ? 1 : std::min(3, K - 1);  // nodes q + 1
+  const double r = 0.5 * (degree_ + 1), S = step_;
+  for (int i = 0; i < count_; ++i) {
+    const int m = first_ + i;
+    const double s0 = std::max(lo_all, S * (m - r)), s1 = std::min(hi_all, S * (m + r));
+    if (!(s1 > s0)) continue;
+    // pieces -1 .. K-1 meeting (s0, s1): piece p spans [t_p, t_p+1]
+    const int p0 = first_true(0, K, [&](int k) { return t[k] > s0; }) - 1;
+    const int p1 = first_true(0, K, [&](int k) { return t[k] >= s1; }) - 1;
+    std::vector<double> bp;
+    for (int j = 0; j <= degree_ + 1; ++j) bp.push_back(S * (m - r + j));
+    for (int piece = p0; piece <= p1; ++piece) {
+      const double lo = std::max(s0, piece < 0 ? lo_all : t[piece]);
+      const double hi = std::min(s1, piece + 1 >= K ? hi_all : t[piece + 1]);
+      if (!(hi > lo)) continue;
+      const int gap = std::clamp(piece, 0, K - 2);                  // the gap whose polynomial
+      const int j0 = std::clamp(gap - (q - 1) / 2, 0, K - 1 - q);  // nodes j0 .. j0 + q
+      for (int k = j0; k <= j0 + q; ++k) {
+        auto basis = [&](double x) {
+          double v = 1;
+          for (int j = j0; j <= j0 + q; ++j)
+            if (j != k) v *= (x - t[j]) / (t[k] - t[j]);
+          return v;
+        };
+        add(i, k,
+            piecewise_integral([&](double x) { return basis(x) * bspline(degree_, x / S - m); },
+                               lo, hi, bp) /
+                S);
+      }
+    }
+  }
+}
+
+// Acquisition of the hold: each sub-frame held over its own cell, the cells
+// mirrored about a and b; (1/S) integral of b_D(t/S - m) over a cell,
+// exactly, from the cumulative B-spline. Only the cells under row i's
+// support and its two mirror images.
+void TimeProjection::acquire_hold(double a, double b) {
+  const std::vector<double>& t = t_;
+  const int K = static_cast<int>(t.size());
+  const double r = 0.5 * (degree_ + 1), S = step_;
+  auto cell_lo = [&](int k) { return k == 0 ? a : 0.5 * (t[k - 1] + t[k]); };
+  auto cell_hi = [&](int k) { return k + 1 == K ? b : 0.5 * (t[k] + t[k + 1]); };
+  for (int i = 0; i < count_; ++i) {
+    const int m = first_ + i;
+    auto cell = [&](double lo, double hi) {
+      return bspline_cumulative(degree_, hi / S - m) - bspline_cumulative(degree_, lo / S - m);
     };
-    for (int i = 0; i < count; ++i) {
-      const int m = first + i;
-      if (!(step * (m + r) > lo && step * (m - r) < hi)) continue;
-      std::vector<double> bp;
-      for (int j = 0; j <= degree + 1; ++j) bp.push_back(step * (m - r + j));
-      for (int k = j0; k <= j0 + q; ++k)
-        A[i][k] += piecewise_integral(
-                       [&](double x) { return basis(k, x) * bspline(degree, x / step - m); }, lo,
-                       hi, bp) /
-                   step;
+    // the cells meeting the support or one of its images about a and b
+    int k0 = K, k1 = -1;
+    auto cover = [&](double x0, double x1) {
+      x0 = std::max(x0, a);
+      x1 = std::min(x1, b);
+      if (!(x1 > x0)) return;
+      k0 = std::min(k0, first_true(0, K, [&](int k) { return cell_hi(k) > x0; }));
+      k1 = std::max(k1, first_true(0, K, [&](int k) { return cell_lo(k) >= x1; }) - 1);
+    };
+    cover(S * (m - r), S * (m + r));
+    cover(2 * a - S * (m + r), 2 * a - S * (m - r));
+    cover(2 * b - S * (m + r), 2 * b - S * (m - r));
+    for (int k = k0; k <= k1; ++k) {
+      const double lo = cell_lo(k), hi = cell_hi(k);
+      add(i, k, cell(lo, hi) + cell(2 * a - hi, 2 * a - lo) + cell(2 * b - hi, 2 * b - lo));
     }
   }
 }
 
-// Solves G P = A in place (Gaussian elimination with partial pivoting; the
-// systems are small: the span over the step plus degree + 1 rows).
-void solve_in_place(std::vector<std::vector<double>>& G, std::vector<std::vector<double>>& P) {
-  const int n = static_cast<int>(G.size());
-  const size_t K = P.empty() ? 0 : P[0].size();
-  for (int c = 0; c < n; ++c) {
-    int p = c;
-    for (int i = c + 1; i < n; ++i)
-      if (std::abs(G[i][c]) > std::abs(G[p][c])) p = i;
-    std::swap(G[c], G[p]);
-    std::swap(P[c], P[p]);
-    for (int i = c + 1; i < n; ++i) {
-      const double f = G[i][c] / G[c][c];
-      if (f == 0) continue;
-      for (int j = c; j < n; ++j) G[i][j] -= f * G[c][j];
-      for (size_t k = 0; k < K; ++k) P[i][k] -= f * P[c][k];
+void TimeProjection::factor(const std::function<double(int, int)>& gram) {
+  // banded Cholesky of the Gram matrix (symmetric positive definite: the
+  // Gram matrix of independent functions, or the folded autocorrelation,
+  // which the DCT-II diagonalises with the positive spectrum of b_D's
+  // autocorrelation); every entry within the band |i - j| <= bw
+  bw_ = std::min(degree_, count_ - 1);
+  const int w = bw_ + 1;
+  L_.assign(static_cast<size_t>(count_) * w, 0.0);
+  auto at = [&](int i, int j) -> double& { return L_[static_cast<size_t>(i) * w + (j - i + bw_)]; };
+  for (int i = 0; i < count_; ++i)
+    for (int j = std::max(0, i - bw_); j <= i; ++j) {
+      double s = gram(i, j);
+      for (int k = std::max(0, i - bw_); k < j; ++k) s -= at(i, k) * at(j, k);
+      if (i == j) {
+        if (!(s > 0))
+          throw std::invalid_argument("TimeProjection(): the temporal Gram matrix is singular");
+        at(i, i) = std::sqrt(s);
+      } else {
+        at(i, j) = s / at(j, j);
+      }
     }
-  }
-  for (int c = n - 1; c >= 0; --c) {
-    for (size_t k = 0; k < K; ++k) {
-      double s = P[c][k];
-      for (int j = c + 1; j < n; ++j) s -= G[c][j] * P[j][k];
-      P[c][k] = s / G[c][c];
-    }
-  }
 }
 
-}  // namespace
+void TimeProjection::solve(std::vector<double>& x) const {
+  const int w = bw_ + 1;
+  auto at = [&](int i, int j) { return L_[static_cast<size_t>(i) * w + (j - i + bw_)]; };
+  for (int i = 0; i < count_; ++i) {
+    double s = x[i];
+    for (int k = std::max(0, i - bw_); k < i; ++k) s -= at(i, k) * x[k];
+    x[i] = s / at(i, i);
+  }
+  for (int i = count_ - 1; i >= 0; --i) {
+    double s = x[i];
+    for (int k = i + 1; k <= std::min(count_ - 1, i + bw_); ++k) s -= at(k, i) * x[k];
+    x[i] = s / at(i, i);
+  }
+}
 
 TimeProjection::TimeProjection(std::vector<double> times, int degree, double step,
                                TimeModel model)
@@ -299,7 +375,6 @@ TimeProjection::TimeProjection(std::vector<double> times, int degree, double ste
   double a, b;
   time_span(t_, a, b);
   const double r = 0.5 * (degree + 1);
-  const size_t K = t_.size();
   if (model_ != TimeModel::Hold) {
     // The interpolating models: the least-squares projection of the model on
     // [lo, hi], the span widened to the nearest knots of the B-splines
@@ -315,47 +390,28 @@ TimeProjection::TimeProjection(std::vector<double> times, int degree, double ste
     first_ = na + 1 - (degree + 1) / 2;
     const int last = nb + degree / 2;
     count_ = last - first_ + 1;
-    std::vector<std::vector<double>> A(count_, std::vector<double>(K, 0.0));
-    acquire_interpolated(t_, lo, hi, degree, step, first_, count_, model_, A);
-    std::vector<std::vector<double>> G(count_, std::vector<double>(count_, 0.0));
-    for (int i = 0; i < count_; ++i)
-      for (int j = std::max(0, i - degree); j <= std::min(count_ - 1, i + degree); ++j) {
-        const int m = first_ + i, n = first_ + j;
-        const double s0 = std::max(lo, step * (std::max(m, n) - r));
-        const double s1 = std::min(hi, step * (std::min(m, n) + r));
-        if (!(s1 > s0)) continue;
-        std::vector<double> bp;
-        for (int k = 0; k <= degree + 1; ++k) bp.push_back(step * (m - r + k));
-        G[i][j] = piecewise_integral(
-                      [&](double x) {
-                        return bspline(degree, x / step - m) * bspline(degree, x / step - n);
-                      },
-                      s0, s1, bp) /
-                  step;
-      }
-    P_ = std::move(A);
-    solve_in_place(G, P_);
+    rows_.assign(count_, Row{});
+    acquire_interpolated(lo, hi);
+    factor([&](int i, int j) {
+      const int m = first_ + i, n = first_ + j;
+      const double s0 = std::max(lo, step * (std::max(m, n) - r));
+      const double s1 = std::min(hi, step * (std::min(m, n) + r));
+      if (!(s1 > s0)) return 0.0;
+      std::vector<double> bp;
+      for (int k = 0; k <= degree + 1; ++k) bp.push_back(step * (m - r + k));
+      return piecewise_integral(
+                 [&](double x) { return bspline(degree, x / step - m) * bspline(degree, x / step - n); },
+                 s0, s1, bp) /
+             step;
+    });
     return;
   }
   // every m with (m - r, m + r) meeting (a/S, b/S)
   first_ = static_cast<int>(std::floor(a / step - r)) + 1;
   const int last = static_cast<int>(std::ceil(b / step + r)) - 1;
   count_ = last - first_ + 1;
-  // acquisition: each sub-frame held over its own cell, the cells mirrored
-  // about a and b; (1/S) integral of b_D(t/S - m) over a cell, exactly, from
-  // the cumulative B-spline
-  std::vector<std::vector<double>> A(count_, std::vector<double>(K, 0.0));
-  for (int i = 0; i < count_; ++i) {
-    const int m = first_ + i;
-    auto cell = [&](double lo, double hi) {
-      return bspline_cumulative(degree, hi / step - m) - bspline_cumulative(degree, lo / step - m);
-    };
-    for (size_t k = 0; k < K; ++k) {
-      const double lo = k == 0 ? a : 0.5 * (t_[k - 1] + t_[k]);
-      const double hi = k + 1 == K ? b : 0.5 * (t_[k] + t_[k + 1]);
-      A[i][k] = cell(lo, hi) + cell(2 * a - hi, 2 * a - lo) + cell(2 * b - hi, 2 * b - lo);
-    }
-  }
+  rows_.assign(count_, Row{});
+  acquire_hold(a, b);
   // Gram matrix with mirror folding of the indices outside [0, count)
   const std::vector<double> ac = bspline_autocorrelation(degree);
   auto fold = [&](int j) {
@@ -365,11 +421,12 @@ TimeProjection::TimeProjection(std::vector<double> times, int degree, double ste
     }
     return j;
   };
-  std::vector<std::vector<double>> G(count_, std::vector<double>(count_, 0.0));
-  for (int i = 0; i < count_; ++i)
-    for (int d = -degree; d <= degree; ++d) G[i][fold(i + d)] += ac[std::abs(d)];
-  P_ = std::move(A);
-  solve_in_place(G, P_);
+  factor([&](int i, int j) {
+    double g = 0;
+    for (int d = -degree; d <= degree; ++d)
+      if (fold(i + d) == j) g += ac[std::abs(d)];
+    return g;
+  });
 }
 
 std::vector<double> TimeProjection::coefficients(const std::vector<double>& f) const {
@@ -378,8 +435,20 @@ std::vector<double> TimeProjection::coefficients(const std::vector<double>& f) c
                                 " values for " + std::to_string(t_.size()) + " sub-frames");
   std::vector<double> c(count_, 0.0);
   for (int i = 0; i < count_; ++i)
-    for (size_t k = 0; k < f.size(); ++k) c[i] += P_[i][k] * f[k];
+    for (size_t j = 0; j < rows_[i].v.size(); ++j) c[i] += rows_[i].v[j] * f[rows_[i].k0 + j];
+  solve(c);
   return c;
+}
+
+std::vector<double> TimeProjection::subframe_weights(std::vector<double> w) const {
+  if (w.size() != static_cast<size_t>(count_))
+    throw std::invalid_argument("TimeProjection::subframe_weights(): " + std::to_string(w.size()) +
+                                " weights for " + std::to_string(count_) + " coefficients");
+  solve(w);  // G is symmetric: G^-T w = G^-1 w
+  std::vector<double> u(t_.size(), 0.0);
+  for (int i = 0; i < count_; ++i)
+    for (size_t j = 0; j < rows_[i].v.size(); ++j) u[rows_[i].k0 + j] += w[i] * rows_[i].v[j];
+  return u;
 }
 
 std::vector<double> display_weights(const Shutter& s, double T, double fps, int degree,
@@ -422,15 +491,8 @@ void check_inside(const std::vector<double>& t, const Shutter& s, double T, doub
 
 std::vector<double> frame_weights(const TimeProjection& p, const Shutter& s, double T,
                                   double fps) {
-  const auto& P = p.matrix();
-  const size_t K = P.empty() ? 0 : P[0].size();
   check_inside(p.times(), s, T, fps);
-  const std::vector<double> w =
-      display_weights(s, T, fps, p.degree(), p.step(), p.first(), p.count());
-  std::vector<double> u(K, 0.0);
-  for (int i = 0; i < p.count(); ++i)
-    for (size_t k = 0; k < K; ++k) u[k] += w[i] * P[i][k];
-  return u;
+  return p.subframe_weights(display_weights(s, T, fps, p.degree(), p.step(), p.first(), p.count()));
 }
 
 std::vector<double> conventional_frame_weights(const std::vector<double>& t, const Shutter& s,

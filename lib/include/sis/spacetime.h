@@ -37,10 +37,12 @@ struct SpaceTimePlan {
   std::vector<double> times;
   std::vector<long> frames;
   std::vector<double> frame_times;
-  std::vector<std::vector<double>> weights;  // [frame][sub-frame]
   // Sub-frames whose |weight| is below kWeightFloor times the frame's
   // largest are left out of it (their share of the frame: below K x 1e-12).
   std::vector<long> lo, hi;  // [frame]: the sub-frames it reads, lo..hi
+  // [frame][k - lo[frame]]: the weights of sub-frames lo..hi alone, so the
+  // plan's memory is frames x window, not frames x sub-frames
+  std::vector<std::vector<double>> weights;
   SpaceTimeOptions options;
   bool conventional = false;
 };

@@ -6,6 +6,7 @@
 // everything here is linear, so an output frame is a weighted sum of the
 // sub-frames' spatial coefficients, with the weights computed here once per
 // output frame (plan), independent of the image.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -75,7 +76,10 @@ void check_times(const std::vector<double>& t);
 // of g times b_D is integrated exactly (Gauss-Legendre, 4 points); then the
 // prefilter: the Gram system sum_n a[m-n] c[n] = c~[m] (a = autocorrelation
 // of b_D), indices outside the range folded back by the mirror rule
-// (c[first-1-j] = c[first+j]), solved exactly (banded LU).
+// (c[first-1-j] = c[first+j]), solved exactly (banded Cholesky: the Gram
+// matrix is symmetric positive definite). Memory: A sparse (each coefficient
+// holds the sub-frames under its support) and G banded, so linear in the
+// number of sub-frames.
 class TimeProjection {
  public:
   TimeProjection(std::vector<double> times, int degree, double step,
@@ -86,18 +90,34 @@ class TimeProjection {
   TimeModel model() const { return model_; }
   int first() const { return first_; }
   int count() const { return count_; }
-  // matrix()[m - first][k]: coefficient m's weight of sub-frame k.
-  const std::vector<std::vector<double>>& matrix() const { return P_; }
-  // Coefficients of scalar samples f(t_k).
+  // Coefficients of scalar samples f(t_k): G^-1 A f.
   std::vector<double> coefficients(const std::vector<double>& f) const;
+  // The sub-frames' weights of a linear functional of the coefficients,
+  // sum_m w[m - first] c[m] = sum_k u[k] f(t_k): u = A^T G^-1 w (G symmetric).
+  std::vector<double> subframe_weights(std::vector<double> w) const;
 
  private:
+  // A, the acquisition, sparse: row i holds the sub-frames k0 .. k0 + v.size() - 1
+  // under coefficient first + i's support (and its mirror images at the ends)
+  struct Row {
+    int k0 = 0;
+    std::vector<double> v;
+  };
+  void add(int i, int k, double v);
+  void acquire_hold(double a, double b);
+  void acquire_interpolated(double lo, double hi);
+  void factor(const std::function<double(int, int)>& gram);
+  void solve(std::vector<double>& x) const;  // x <- G^-1 x
+
   std::vector<double> t_;
   int degree_;
   double step_;
   TimeModel model_;
   int first_ = 0, count_ = 0;
-  std::vector<std::vector<double>> P_;
+  std::vector<Row> rows_;
+  // G's banded Cholesky factor: row i's entries j = i - bw .. i
+  int bw_ = 0;
+  std::vector<double> L_;
 };
 
 // Temporal display weights of the frame at time T:
@@ -107,7 +127,8 @@ std::vector<double> display_weights(const Shutter& s, double T, double fps, int 
                                     double step, int first, int count);
 
 // Sub-frame weights of the frame at time T for the space-time method:
-// u_k = sum_m w_m P[m][k]; the frame is sum_k u_k (spatial coefficients k).
+// u = TimeProjection::subframe_weights(display weights); the frame is
+// sum_k u_k (spatial coefficients k).
 // Throws when the shutter is not inside the sub-frames' span.
 std::vector<double> frame_weights(const TimeProjection& p, const Shutter& s, double T,
                                   double fps);
