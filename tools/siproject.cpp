@@ -944,6 +944,10 @@ int main(int argc, char** argv) try {
                                     "--rule variational: the functional's order, 1 (|grad f|^2) or "
                                     "2 (thin plate, f_xx^2 + 2 f_xy^2 + f_yy^2)")
                          ->capture_default_str();
+  app.add_option("--refined", o.settings.refined,
+                 "the second pass of an adaptive render: the extra rays' render (sirays assemble "
+                 "--refinement; the refinement in its sis:refinement attribute), projected with IN, "
+                 "the sobol render it refines, as one set of samples each weighing its area");
   auto* iterations = app.add_option("--iterations", o.settings.iterations,
                                     "--rule fit: at most this many conjugate-gradient iterations")
                          ->capture_default_str();

@@ -17,6 +17,7 @@
 
 #include "sis/imageio.h"
 #include "sis/pattern.h"
+#include "sis/refinement.h"
 #include "sis/scattered.h"
 
 namespace sis {
@@ -77,5 +78,15 @@ ScatteredLayout scattered_layout(const ImageReader& reader);
 // that is no longer that file is an InputError.
 ScatteredInput read_scattered(const std::string& path, const std::optional<Transfer>& transfer,
                               const FileSignature& expected = {});
+
+// The second pass of an adaptive render (sis/refinement.h): `path`, the
+// extra rays' render (sirays assemble --refinement), whose sis:refinement
+// attribute holds the refinement's text and whose first extra_count()
+// pixels, row-major, are the extra rays' values, added to `base` (a sobol
+// render read by read_scattered) by adaptive_samples. InputError naming the
+// file: no sis:refinement, a refinement that does not parse, a base pattern
+// other than base's, other channels, fewer pixels than rays.
+inline constexpr const char* kRefinementKey = "sis:refinement";
+void add_refinement(ScatteredInput& base, const std::string& path, const std::optional<Transfer>& transfer);
 
 }  // namespace sis
