@@ -774,7 +774,7 @@ int main(int argc, char** argv) {
   ref->add_option("-o,--output", ro.output, "the refinement (text; sirays mesh/assemble --refinement)")->required();
   ref->add_option("--rays", ro.rays, "rays per output pixel over the whole frame, both passes")->required();
   auto* rr = ref->add_option("--refine-rays", ro.refine_rays,
-                             "rays per pixel in a refined tile [default: max(64, --rays), at most 1024]");
+                             "rays per pixel in a refined tile [default: the count up to max(64, --rays) whose tiles leave the least estimated error, a tile's error taken to fall as 1 / its rays]");
   auto* sh = ref->add_option("--share", ro.share,
                              "the fraction of the frame's pixels refined, (0, 1] (sets --refine-rays)");
   ref->add_option("--tile", ro.tile, "tile side in output pixels")->capture_default_str();

@@ -242,15 +242,6 @@ Refinement plan_refinement(const SamplePattern& base, const std::vector<double>&
                                 std::to_string(g.count()) + " tiles");
   for (double e : estimate)
     if (!std::isfinite(e)) throw std::invalid_argument("a tile estimate is not finite");
-  long fine;
-  if (rays)
-    fine = *rays;
-  else if (share)
-    fine = b + long(std::floor((budget - double(b)) / *share + 1e-9));
-  else
-    fine = long(std::min(1024.0, std::max(64.0, std::floor(budget))));
-  if (fine <= b) fine = b + 1;
-  r = make_refinement(base, tile, fine, {});
   std::vector<long> order(estimate.size());
   std::iota(order.begin(), order.end(), 0L);
   std::stable_sort(order.begin(), order.end(),
@@ -258,16 +249,43 @@ Refinement plan_refinement(const SamplePattern& base, const std::vector<double>&
   // both passes' rays within budget x pixels (whole rays)
   const double P = double(base.width * base.height);
   const long allowed = long(std::floor(budget * P + 1e-6)) - base.count();
-  long used = 0;
-  std::vector<long> chosen;
-  for (long t : order) {
-    const long add = g.pixels(t) * (fine - b);
-    if (used + add > allowed) break;
-    used += add;
-    chosen.push_back(t);
+  // the tiles by decreasing estimate while they fit; the estimate they leave
+  // under the model that a tile's error falls as 1 / its rays
+  auto choose = [&](long fine, double* left) {
+    long used = 0;
+    double removed = 0;
+    std::vector<long> chosen;
+    for (long t : order) {
+      const long add = g.pixels(t) * (fine - b);
+      if (used + add > allowed) break;
+      used += add;
+      removed += estimate[std::size_t(t)] * (1 - double(b) / double(fine));
+      chosen.push_back(t);
+    }
+    if (left) *left = -removed;
+    std::sort(chosen.begin(), chosen.end());
+    return chosen;
+  };
+  long fine;
+  if (rays) {
+    fine = *rays;
+  } else if (share) {
+    fine = b + long(std::floor((budget - double(b)) / *share + 1e-9));
+  } else {
+    // the refined rays that leave the least estimated error, from b + 1 to
+    // max(64, budget) (ties: the fewer rays)
+    const long top = std::max(64L, long(std::floor(budget)));
+    fine = b + 1;
+    double best = HUGE_VAL;
+    for (long f = b + 1; f <= top; ++f) {
+      double left = 0;
+      choose(f, &left);
+      if (left < best) best = left, fine = f;
+    }
   }
-  std::sort(chosen.begin(), chosen.end());
-  r.tiles = std::move(chosen);
+  if (fine <= b) fine = b + 1;
+  r = make_refinement(base, tile, fine, {});
+  r.tiles = choose(fine, nullptr);
   return r;
 }
 

@@ -85,7 +85,10 @@ Refinement make_refinement(const SamplePattern& base, long tile, long rays, std:
 // while both passes' rays fit the budget. rays: the refined tiles' rays per
 // pixel, or none: given share (the fraction of the frame's pixels refined,
 // (0, 1]) as base + (budget - base) / share rounded down, or with neither
-// min(max(64, budget), 1024) (docs/design.md section 17 says why).
+// the r in (base, max(64, budget)] whose tiles leave the least estimate
+// under the model that a tile's error falls as 1 / its rays (sum of the
+// unrefined tiles' estimates plus base / r times the refined ones'; ties:
+// the smaller r; docs/design.md section 17 says why).
 // std::invalid_argument: a budget below the base's rays per pixel or not
 // finite, a share outside (0, 1], both rays and share given, an estimate of
 // another tile count or not finite.
