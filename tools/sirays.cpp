@@ -656,7 +656,7 @@ Refinement read_refinement(const std::string& path) {
 }
 
 struct RefineOptions {
-  std::string base, output, estimates, estimator = "halves";
+  std::string base, output, estimates, estimator = "residual";
   double rays = 0;
   long refine_rays = 0, tile = 8;
   double share = 0;
@@ -778,7 +778,7 @@ int main(int argc, char** argv) {
   auto* sh = ref->add_option("--share", ro.share,
                              "the fraction of the frame's pixels refined, (0, 1] (sets --refine-rays)");
   ref->add_option("--tile", ro.tile, "tile side in output pixels")->capture_default_str();
-  ref->add_option("--estimator", ro.estimator, "halves, contrast, residual or highpass")->capture_default_str();
+  ref->add_option("--estimator", ro.estimator, "residual, halves, contrast or highpass (docs/design.md section 17)")->capture_default_str();
   ref->add_option("--estimates", ro.estimates,
                   "also write every tile's estimate and whether it is refined (EXR, one pixel a tile)");
   ref->add_option("--threads", threads, "threads (0: every core)")->capture_default_str();
