@@ -758,7 +758,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> bands;
   bool row_bug = false;
   CLI::App* asmb = app.add_subcommand("assemble", "the bands' renders as one input with the pattern's metadata");
-  asmb->add_option("bands", bands, "the bands' renders (EXR), in row order")->required();
+  asmb->add_option("bands", bands, "the bands' renders (EXR), in row order (none for a refinement of no tile)");
   asmb->add_option("-o,--output", output, "the assembled render (.exr)")->required();
   asmb->add_flag("--row-bug", row_bug,
                  "each band was rendered one row higher for POV-Ray 3.7.0's FS#254: drop its first row");
@@ -766,6 +766,9 @@ int main(int argc, char** argv) {
                    "the bands are a refinement's extra rays: write them with the refinement in "
                    "sis:refinement (siproject BASE --refined)");
   add_pattern_options(asmb, po);
+  CLI::App* grid = app.add_subcommand("grid", "print the width and height of a refinement's ray grid "
+                                              "(the second pass's render; 0 0 for no extra ray)");
+  grid->add_option("--refinement", refinement, "the refinement (sirays refine -o)")->required();
   RefineOptions ro;
   CLI::App* ref = app.add_subcommand(
       "refine", "estimate where a sobol render's projection errs, per tile, and choose the tiles "
@@ -799,6 +802,22 @@ int main(int argc, char** argv) {
     } else if (po.size.empty() || po.factor == 0) {
       throw UsageError("--size and --factor: the pattern's frame and factor are required (or --refinement)");
     }
+    if (grid->parsed()) {
+      const long m = rf->extra_count();
+      const long gw = std::min(m, rf->base.grid_width());
+      std::cout << gw << " " << (m ? (m + gw - 1) / gw : 0) << "\n";
+      return 0;
+    }
+    if (asmb->parsed() && rf && rf->extra_count() == 0) {
+      // no tile refined: a file of no ray (one pixel, which no ray reads)
+      if (!bands.empty()) throw UsageError("--refinement " + refinement + " refines no tile: it takes no band");
+      Image none(1, 1, 1, kUnset);
+      none.data[0] = 0;
+      write_image(output, none, {"none"}, {{kRefinementKey, refinement_text(*rf)}}, -1,
+                  WriteOptions(SampleFormat::Half));
+      return 0;
+    }
+    if (asmb->parsed() && bands.empty()) throw UsageError("assemble: no band given");
     const RayGrid rg = rf ? refinement_rays(*rf) : pattern_rays(pattern_of(po));
     if (mesh->parsed()) {
       long y0 = 0, y1 = rg.gh;

@@ -194,9 +194,13 @@ void add_refinement(ScatteredInput& base, const std::string& path, const std::op
                      base.label + " is " + pattern_name(p.kind) + " seed " + std::to_string(p.seed) +
                      " frame " + std::to_string(p.width) + "x" + std::to_string(p.height) + " factor " +
                      metadata_number(p.factor));
+  const long m = ref.extra_count();
+  if (m == 0) {  // nothing refined: the base's samples as they are
+    base.label += " + " + fs::path(path).filename().string();
+    return;
+  }
   if (r.channel_names() != base.channel_names)
     throw InputError(path + ": its channels are not " + base.label + "'s");
-  const long m = ref.extra_count();
   const long w = r.width(), h = r.height();
   if (std::uint64_t(w) * std::uint64_t(h) < std::uint64_t(m))
     throw InputError(path + ": " + std::to_string(w * h) + " pixels for the refinement's " +
