@@ -502,6 +502,7 @@ std::string pov_string(const std::string& path) {
 // describes them for the scene's first line.
 struct RayGrid {
   long gw = 0, gh = 0;
+  long camera_w = 0, camera_h = 0;  // image_width, image_height of the camera's frame (the pattern's grid)
   double W = 0, H = 0;
   std::string what;
   std::function<void(long, long, double*)> positions;
@@ -509,8 +510,8 @@ struct RayGrid {
 
 RayGrid pattern_rays(const SamplePattern& pat) {
   RayGrid g;
-  g.gw = pat.grid_width();
-  g.gh = pat.grid_height();
+  g.gw = g.camera_w = pat.grid_width();
+  g.gh = g.camera_h = pat.grid_height();
   g.W = double(pat.width);
   g.H = double(pat.height);
   g.what = std::string("pattern ") + pattern_name(pat.kind) + ", seed " + std::to_string(pat.seed) +
@@ -528,6 +529,9 @@ RayGrid refinement_rays(const Refinement& r) {
   if (m < 1) throw UsageError("the refinement refines no tile: there are no extra rays to trace");
   g.gw = std::min(m, r.base.grid_width());
   g.gh = (m + g.gw - 1) / g.gw;
+  // the camera's aspect is the frame's: image_width and image_height as the base render's
+  g.camera_w = r.base.grid_width();
+  g.camera_h = r.base.grid_height();
   g.W = double(r.base.width);
   g.H = double(r.base.height);
   g.what = "the " + std::to_string(m) + " extra rays of a refinement of " + std::to_string(r.tiles.size()) +
@@ -544,7 +548,7 @@ RayGrid refinement_rays(const Refinement& r) {
 void write_mesh(const std::string& scene, const std::string& output, const RayGrid& rg,
                 long y0, long y1, int threads) {
   const long gw = rg.gw;
-  const Camera cam = parse_camera(scene, gw, rg.gh);
+  const Camera cam = parse_camera(scene, rg.camera_w, rg.camera_h);
   const long n = (y1 - y0) * gw;
   StagedFile staged(output);
   std::string head;
