@@ -711,3 +711,34 @@ compare-sparse: $(if $(PREBUILT),,build)
 	@PYTHONPATH=$(BUILD)/python $(PYTHON) scripts/compare_sparse.py --work $(SP_WORK) \
 	  --report $(OUT)/report$(if $(QUICK),-quick)/sparse --scenes "$(SP_SCENES)" --res $(SP_RES) \
 	  --ref-factor $(SP_REF_FACTOR) --seed $(SP_SEED)
+
+# make compare-adaptive [QUICK=1]: adaptive rays (docs/studies.md): the
+# estimators against the oracle (per-tile error of min-error cubic) and the
+# L2 error against rays per pixel of uniform sobol rays and adaptive ones,
+# every set a subset of the sobol render of 64 rays per pixel
+# (scripts/compare_adaptive.py); and make SAMPLES=adaptive RAYS=16's own
+# two passes measured. $(OUT)/report(-quick)/adaptive/adaptive.md,
+# adaptive.csv, estimators.csv. QUICK=1: objects and edges at 128^2,
+# reference factor 16.
+ifneq ($(QUICK),)
+AD_SCENES ?= objects edges
+AD_RES ?= 128
+AD_REF_FACTOR ?= 16
+else
+AD_SCENES ?= objects hdr checker edges
+AD_RES ?= 256
+AD_REF_FACTOR ?= 32
+endif
+AD_WORK ?= $(OUT)/compare-adaptive$(if $(QUICK),-quick)
+AD_MAKE = $(MAKE) --no-print-directory SIPROJECT=$(SIPROJECT) SIMETRICS=$(SIMETRICS) SIRAYS=$(SIRAYS) \
+  OUT=$(AD_WORK) RES=$(AD_RES) ZP_NYQUIST=$(ZP_NYQUIST)
+.PHONY: compare-adaptive
+compare-adaptive: $(if $(PREBUILT),,build)
+	@set -e; for s in $(AD_SCENES); do \
+	  $(AD_MAKE) SCENE=$$s FACTOR=$(AD_REF_FACTOR) render; \
+	  for f in 2 4 8; do $(AD_MAKE) -j$(JOBS) SCENE=$$s FACTOR=$$f SAMPLES=sobol SEED=0 render; done; \
+	  $(AD_MAKE) SCENE=$$s SAMPLES=adaptive RAYS=16 SEED=0 METHODS=me-cubic scene >/dev/null; \
+	done
+	@PYTHONPATH=$(BUILD)/python $(PYTHON) scripts/compare_adaptive.py --work $(AD_WORK) \
+	  --report $(OUT)/report$(if $(QUICK),-quick)/adaptive --scenes "$(AD_SCENES)" --res $(AD_RES) \
+	  --ref-factor $(AD_REF_FACTOR) --seed 0 --sirays $(SIRAYS) --siproject $(SIPROJECT)

@@ -260,18 +260,47 @@ def write(a, rows, est_rows, notes, pipeline):
     print("\n".join(L))
 
 
+def stats(path):
+    out = {}
+    if os.path.isfile(path):
+        for line in open(path):
+            w = line.split()
+            if len(w) >= 2:
+                out[w[0]] = float(w[1])
+    return out
+
+
 def pipeline_rows(a):
-    """The pipeline's own adaptive images (make SAMPLES=adaptive, RAYS=16) measured."""
+    """make SAMPLES=adaptive RAYS=16's own passes (the real second pass
+    traced by POV-Ray), projected by siproject --refined, against the
+    reference; and the POV-Ray wall times beside the uniform render of 16
+    rays per pixel (make SAMPLES=sobol FACTOR=4)."""
     out = []
     for scene in a.scenes.split():
-        d = os.path.join(a.work, f"{scene}-adaptive-r16-s{a.seed}")
-        c = os.path.join(d, "me-cubic.coeffs.exr")
-        if not os.path.isfile(c):
+        name = os.path.join(a.work, "render", f"{scene}-{a.res}-adaptive-r16-s{a.seed}")
+        base = render_path(a.work, scene, a.res, "2", "sobol", a.seed)
+        if not os.path.isfile(name + ".exr"):
             continue
+        with tempfile.TemporaryDirectory() as t:
+            subprocess.run([a.siproject, base, "--refined", name + ".exr", "--size", f"{a.res}x{a.res}",
+                            "--generator", "cubic", "--method", "min-error", "--coeffs",
+                            os.path.join(t, "k.exr"), "-o", os.path.join(t, "o.exr"), "-q"], check=True)
+            k = siproject.load(os.path.join(t, "k.exr"))
         ref = siproject.read_image(render_path(a.work, scene, a.res, a.ref_factor, "regular", 0))
-        k = siproject.load(c)
-        out.append(f"- {scene}: {d}/me-cubic.exr, L2 {siproject.Reference(ref, border=a.border).l2_error(k):.6f} "
-                   f"(coefficients as the coefficient file keeps them, float)")
+        l2 = siproject.Reference(ref, border=a.border).l2_error(k)
+        words = open(name + ".refine.txt").read().split()
+        rays, tiles = int(words[words.index("rays") + 1]), int(words[words.index("tiles") + 1])
+        b = stats(render_path(a.work, scene, a.res, "2", "sobol", a.seed).replace(".exr", ".stats"))
+        x = stats(name + ".stats")
+        u = stats(render_path(a.work, scene, a.res, "4", "sobol", a.seed).replace(".exr", ".stats"))
+        total = (b.get("wall_s", 0) + b.get("mesh_s", 0) + x.get("refine_s", 0) + x.get("wall_s", 0))
+        out.append(f"- {scene}: {tiles} tiles refined to {rays} rays per pixel, L2 {l2:.6f} "
+                   f"(coefficients in float, as the coefficient file keeps them); first pass "
+                   f"{b.get('wall_s', 0):.2f} s of POV-Ray and {b.get('mesh_s', 0):.2f} s of sirays mesh, "
+                   f"sirays refine {x.get('refine_s', 0):.2f} s, second pass {x.get('wall_s', 0):.2f} s "
+                   f"({int(x.get('extra_rays', 0))} rays, one POV-Ray process): {total:.2f} s in all, "
+                   f"against {u.get('wall_s', 0) + u.get('mesh_s', 0):.2f} s for the uniform render of 16 "
+                   f"rays per pixel")
     return out
 
 
@@ -286,6 +315,7 @@ def main():
     p.add_argument("--tile", type=int, default=8)
     p.add_argument("--border", type=float, default=2.0)
     p.add_argument("--sirays", default="build/tools/sirays")
+    p.add_argument("--siproject", default="build/tools/siproject")
     a = p.parse_args()
     rows, est_rows, notes = measure(a)
     write(a, rows, est_rows, notes, pipeline_rows(a))
