@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # adaptive.sh SOURCE_DIR SIPROJECT SIRAYS
 #
-# End-to-end test of adaptive rays (ctest label e2e; about 20 s): make
+# End-to-end test of adaptive rays (ctest label e2e; about 25 s): make
 # SAMPLES=adaptive RAYS=12 on objects at 32 x 32 renders the sobol first pass,
 # refines tiles (sirays refine), traces only the extra rays in one POV-Ray
-# process, forms the images from both passes, and puts rays.png on the
-# scene's page; a budget of the base's own rays (RAYS=4) refines nothing and
+# process (in three under MESH_RAYS=3000, the same images bit for bit),
+# forms the images from both passes, and puts rays.png on the scene's page; a budget of the base's own rays (RAYS=4) refines nothing and
 # gives the uniform sobol render's images bit for bit; bad requests are
 # refused with the option or file named and nothing written: a budget below
 # the base pattern (make and sirays refine), a refinement of no tile traced
@@ -38,6 +38,17 @@ if mk SAMPLES=adaptive RAYS=12 >"$tmp/log" 2>&1; then
   fi
 else
   cat "$tmp/log" >&2; fail "make SAMPLES=adaptive RAYS=12 failed"
+fi
+
+# 1b. the second pass in bands of MESH_RAYS=3000 (3 POV-Ray processes): the same images
+if make -C "$src" --no-print-directory SIPROJECT="$siproject" SIRAYS="$sirays" OUT="$tmp/banded" \
+     SCENE=objects RES=32 METHODS="me-cubic conv-tent" SAMPLES=adaptive RAYS=12 MESH_RAYS=3000 >"$tmp/log" 2>&1 &&
+   grep -q 'the second pass: .* 3 band(s)' "$tmp/log" &&
+   oiiotool "$tmp/banded/objects-adaptive-r12-s0/me-cubic.exr" "$tmp/out/objects-adaptive-r12-s0/me-cubic.exr" \
+     --fail 0 --warn 0 --diff >"$tmp/diff" 2>&1; then
+  ok "MESH_RAYS=3000: the second pass in 3 bands gives the one band's images bit for bit"
+else
+  cat "$tmp/log" "$tmp/diff" >&2; fail "MESH_RAYS=3000: the banded second pass differs or failed"
 fi
 
 # 2. nothing refined: the uniform sobol render's images, bit for bit
