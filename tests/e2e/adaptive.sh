@@ -5,8 +5,9 @@
 # SAMPLES=adaptive RAYS=12 on objects at 32 x 32 renders the sobol first pass,
 # refines tiles (sirays refine), traces only the extra rays in one POV-Ray
 # process (in three under MESH_RAYS=3000, the same images bit for bit),
-# forms the images from both passes, and puts rays.png on the scene's page; a budget of the base's own rays (RAYS=4) refines nothing and
-# gives the uniform sobol render's images bit for bit; bad requests are
+# forms the images from both passes, and puts rays.png on the scene's
+# page; a budget of the base's own rays (RAYS=4) refines nothing and gives
+# the uniform sobol render's images bit for bit; bad requests are
 # refused with the option or file named and nothing written: a budget below
 # the base pattern (make and sirays refine), a refinement of no tile traced
 # (an empty region), a tile outside the frame, a tile of 0 pixels, --refined
