@@ -683,40 +683,18 @@ void refine(const RefineOptions& o, int threads) {
   if (o.tile < 1) throw UsageError("--tile " + std::to_string(o.tile) + ": expected a whole number >= 1");
   if (!(o.rays > 0) || !std::isfinite(o.rays))
     throw UsageError("--rays " + metadata_number(o.rays) + ": expected a number of rays per pixel > 0");
-  ScatteredInput in = read_scattered(o.base, std::nullopt);
-  if (!in.pattern || in.pattern->kind != PatternKind::Sobol)
-    throw InputError(o.base + ": " +
-                     (in.pattern ? std::string("a ") + pattern_name(in.pattern->kind) + " render"
-                                 : std::string("names no sample pattern")) +
-                     ": refinement adds sobol points to a sobol render's pixels (make SAMPLES=sobol)");
-  const SamplePattern& pat = *in.pattern;
+  RefinedPlan plan;
   try {
-    make_refinement(pat, o.tile, pat.count() / (pat.width * pat.height) + 1, {});
-  } catch (const std::invalid_argument& e) {
-    throw InputError(o.base + ": " + e.what());
-  }
-  ScatteredTarget t;
-  t.width = double(pat.width);
-  t.height = double(pat.height);
-  ScatteredOptions so;
-  so.threads = threads;
-  std::vector<double> e;
-  try {
-    const Coefficients k = project_scattered(in.samples, t, so);
-    e = estimate_tile_error(in.samples, k, t, so, est, o.tile);
-  } catch (const std::invalid_argument& x) {
-    throw InputError(o.base + ": " + x.what());
-  }
-  Refinement r;
-  try {
-    r = plan_refinement(pat, e, o.tile, o.rays,
-                        o.refine_rays_given ? std::optional<long>(o.refine_rays) : std::nullopt,
-                        o.share_given ? std::optional<double>(o.share) : std::nullopt);
+    plan = refine_render(o.base, o.rays,
+                         o.refine_rays_given ? std::optional<long>(o.refine_rays) : std::nullopt,
+                         o.share_given ? std::optional<double>(o.share) : std::nullopt, o.tile, est, threads);
   } catch (const std::invalid_argument& x) {
     throw UsageError("--rays " + metadata_number(o.rays) +
                      (o.refine_rays_given ? " --refine-rays " + std::to_string(o.refine_rays) : std::string()) +
                      (o.share_given ? " --share " + metadata_number(o.share) : std::string()) + ": " + x.what());
   }
+  const Refinement& r = plan.refinement;
+  const std::vector<double>& e = plan.estimate;
   const std::string text = refinement_text(r);
   StagedFile staged(o.output);
   write_all(staged.fd(), text, o.output);

@@ -226,4 +226,35 @@ void add_refinement(ScatteredInput& base, const std::string& path, const std::op
   base.label += " + " + fs::path(path).filename().string();
 }
 
+RefinedPlan refine_render(const std::string& path, double budget, std::optional<long> rays,
+                          std::optional<double> share, long tile, Estimator estimator, int threads) {
+  if (tile < 1) throw std::invalid_argument("a tile of " + std::to_string(tile) + " pixels: expected >= 1");
+  ScatteredInput in = read_scattered(path, std::nullopt);
+  if (!in.pattern || in.pattern->kind != PatternKind::Sobol)
+    throw InputError(path + ": " +
+                     (in.pattern ? std::string("a ") + pattern_name(in.pattern->kind) + " render"
+                                 : std::string("names no sample pattern")) +
+                     ": refinement adds sobol points to a sobol render's pixels (make SAMPLES=sobol)");
+  const SamplePattern& pat = *in.pattern;
+  try {
+    make_refinement(pat, tile, pat.count() / (pat.width * pat.height) + 1, {});
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path + ": " + e.what());
+  }
+  ScatteredTarget t;
+  t.width = double(pat.width);
+  t.height = double(pat.height);
+  ScatteredOptions so;
+  so.threads = threads;
+  RefinedPlan plan;
+  try {
+    const Coefficients k = project_scattered(in.samples, t, so);
+    plan.estimate = estimate_tile_error(in.samples, k, t, so, estimator, tile);
+  } catch (const std::invalid_argument& x) {
+    throw InputError(path + ": " + x.what());
+  }
+  plan.refinement = plan_refinement(pat, plan.estimate, tile, budget, rays, share);
+  return plan;
+}
+
 }  // namespace sis

@@ -89,4 +89,18 @@ ScatteredInput read_scattered(const std::string& path, const std::optional<Trans
 inline constexpr const char* kRefinementKey = "sis:refinement";
 void add_refinement(ScatteredInput& base, const std::string& path, const std::optional<Transfer>& transfer);
 
+// The first pass of an adaptive render refined (sirays refine, Python
+// refine()): the sobol render at `path` projected (min-error cubic, the fit,
+// mirror, on `threads` threads), every tile's estimate, and the tiles the
+// budget buys (plan_refinement). InputError naming the file: not a sobol
+// render of a whole number of rays in every pixel, unreadable; the plan's
+// std::invalid_argument (a budget below the base...) as it is, for the
+// caller to name its options.
+struct RefinedPlan {
+  Refinement refinement;
+  std::vector<double> estimate;  // per tile, row-major
+};
+RefinedPlan refine_render(const std::string& path, double budget, std::optional<long> rays,
+                          std::optional<double> share, long tile, Estimator estimator, int threads);
+
 }  // namespace sis
