@@ -6,6 +6,10 @@
 #   make compare     accuracy against speed, every scene and method: out/report/
 #   make compare-samples  the sample patterns compared: out/report/samples/
 #   make render      the render of SCENE alone (with SAMPLES, SEED...)
+#   make anim        an animation of SCENE: sub-frames, space-time frames and
+#                    videos (FRAMES, SUBFRAMES, FPS...: see "anim" below);
+#                    make anim-subframes: the sub-frames alone
+#   make compare-anim  the animation study: out/report/anim/
 #   make stability   where the methods fail: out/report/stability/
 #   make bench       speed and memory against oiiotool and splineops: out/bench/
 #   make install     build, then install into PREFIX (default /usr/local):
@@ -134,7 +138,7 @@ MAKEFLAGS += --no-print-directory
 # One job at a time: POV-Ray and siproject use every core themselves, and the
 # times in the summary stay comparable. Bands (TILES > 1) are meant to run
 # in parallel.
-ifeq ($(TILES)-$(SAMPLES),1-regular)
+ifeq ($(TILES)-$(SAMPLES)-$(filter anim anim-subframes,$(MAKECMDGOALS)),1-regular-)
 .NOTPARALLEL:
 endif
 .DELETE_ON_ERROR:
@@ -255,13 +259,16 @@ endif
 
 ALL_SCENES := $(sort $(basename $(notdir $(wildcard $(SCENEDIR)/*.pov))))
 ifeq ($(filter $(SCENE),$(ALL_SCENES)),)
-ifneq ($(filter all scene,$(or $(MAKECMDGOALS),all)),)
+ifneq ($(filter all scene anim anim-subframes,$(or $(MAKECMDGOALS),all)),)
 $(error no scene $(SCENEDIR)/$(SCENE).pov; scenes: $(ALL_SCENES))
 endif
 endif
 
 # The zone plate's frequency scales with the output width (scenes/zoneplate.pov).
 POVOPTS_zoneplate = Declare=ZP_K=$(shell awk 'BEGIN { printf "%.6f", $(ZP_NYQUIST) * atan2(0, -1) * $(RES_W) }')
+# The sweep (scenes/sweep.pov): the zone plate's frequency as the zone plate's,
+# moving at SWEEP_V frame widths per second; SWEEP_PATTERN=bars for edges.
+POVOPTS_sweep = $(POVOPTS_zoneplate) Declare=SW_V=$(SWEEP_V) Declare=SW_PATTERN=$(if $(filter bars,$(SWEEP_PATTERN)),1,0)
 
 # Writes TEXT to the stamp FILE only when it differs, so that FILE's time
 # changes only with its content. $(call stamp,FILE,TEXT)
@@ -499,6 +506,111 @@ endif
 all-scenes: $(if $(PREBUILT),,build) $(foreach s,$(ALL_SCENES),$(call summary_of,$(s)) $(call dir_of,$(s))/index.html)
 	@for f in $(filter %/summary.txt,$^); do echo; cat "$$f"; done
 
+
+# ---- anim: sub-frames, space-time frames and videos (docs/pipeline.md) -------
+# make anim SCENE=carousel FRAMES=48 SUBFRAMES=4: SUBFRAMES sub-frames per
+# rendered frame at RENDER_FPS (scripts/anim_times.py: the centres of equal
+# parts of each frame interval, or jittered with TIME_JITTER=SEED), each its
+# own make target rendered through POV-Ray's Clock (seconds) and tagged with
+# its time (sis:time, by oiiotool), so make -j and a make-driven farm render
+# them in parallel; then the frames at FPS by siproject --fps twice: the
+# space-time projection (ANIM_METHOD's spatial options, TIME_DEGREE,
+# TIME_MODEL, SHUTTER, SHUTTER_CURVE) and, when FPS is RENDER_FPS, the
+# sub-frame average within the shutter (the conventional box: what
+# averaging sub-frames gives); each
+# encoded by ffmpeg as an MP4 (H.264) and an animated WebP, shown side by
+# side in index.html. Files in $(ANIM_DIR):
+#   sub.NNNN.exr                  the sub-frames (half, linear; sis:time)
+#   spacetime-FPSfps/frame.NNNN.png, average-FPSfps/...   the frames
+#   spacetime-FPSfps.mp4, .webp, average-FPSfps.mp4, .webp, index.html
+FRAMES ?= 24
+SUBFRAMES ?= 4
+RENDER_FPS ?= 24
+FPS ?= $(RENDER_FPS)
+SHUTTER ?= 180
+SHUTTER_CURVE ?= box
+TIME_DEGREE ?= 3
+TIME_MODEL ?= cubic
+TIME_JITTER ?=
+ANIM_METHOD ?= me-cubic
+SWEEP_V ?= 0.25
+SWEEP_PATTERN ?= zoneplate
+ANIM_GOALS := $(filter anim anim-subframes,$(MAKECMDGOALS))
+ifneq ($(ANIM_GOALS),)
+ifneq ($(shell echo '$(FRAMES) $(SUBFRAMES)' | grep -Ex '[1-9][0-9]* [1-9][0-9]*'),$(FRAMES) $(SUBFRAMES))
+$(error FRAMES=$(FRAMES) SUBFRAMES=$(SUBFRAMES): expected positive whole numbers)
+endif
+ifeq ($(shell echo '$(RENDER_FPS) $(FPS)' | grep -Ex '([0-9]+\.?[0-9]*|\.[0-9]+) ([0-9]+\.?[0-9]*|\.[0-9]+)' | awk '$$1 > 0 && $$2 > 0'),)
+$(error RENDER_FPS=$(RENDER_FPS) FPS=$(FPS): expected positive numbers)
+endif
+ifneq ($(shell echo '$(TIME_JITTER)' | grep -Ex '[0-9]*'),$(TIME_JITTER))
+$(error TIME_JITTER=$(TIME_JITTER): expected a whole number >= 0 (a seed), or empty for regular times)
+endif
+ifeq ($(METHOD_OPTS_$(ANIM_METHOD)),)
+$(error ANIM_METHOD=$(ANIM_METHOD): not a method; known: box conv-tent me-tent mitchell me-cubic me-tent-2x2 me-cubic-2x2)
+endif
+ifeq ($(filter $(SWEEP_PATTERN),zoneplate bars),)
+$(error SWEEP_PATTERN=$(SWEEP_PATTERN): expected zoneplate or bars)
+endif
+ifneq ($(SAMPLES)-$(TILES)-$(FARM),regular-1-local)
+$(error make anim renders whole regular sub-frames on this machine: SAMPLES, TILES and FARM are not taken)
+endif
+endif
+ANIM_DIR := $(OUT)/anim/$(SCENE)-$(RES_TAG)-f$(FACTOR)-$(RENDER_FPS)fps-k$(SUBFRAMES)$(if $(TIME_JITTER),-j$(TIME_JITTER))
+ANIM_COUNT := $(shell echo $$(( $(FRAMES) * $(SUBFRAMES) )))
+# NNNN:TIME, one word per sub-frame
+ANIM_PAIRS := $(if $(ANIM_GOALS),$(shell python3 scripts/anim_times.py --frames $(FRAMES) \
+  --subframes $(SUBFRAMES) --fps $(RENDER_FPS) $(if $(TIME_JITTER),--jitter $(TIME_JITTER)) --pairs))
+sub_of = $(ANIM_DIR)/sub.$(1).exr
+anim_subs := $(foreach p,$(ANIM_PAIRS),$(call sub_of,$(firstword $(subst :, ,$(p)))))
+ANIM_TIME_OPTS := --fps $(FPS) --shutter $(SHUTTER) --shutter-curve $(SHUTTER_CURVE)
+anim_cmd_spacetime = $(METHOD_OPTS_$(ANIM_METHOD)) $(ANIM_TIME_OPTS) --time-degree $(TIME_DEGREE) --time-model $(TIME_MODEL) $(SIFLAGS)
+anim_cmd_average = $(METHOD_OPTS_box) $(ANIM_TIME_OPTS) $(SIFLAGS)
+
+# $(call sub_rules,N,TIME): sub-frame N, rendered at Clock=TIME; oiiotool
+# records the time as a string (its float type keeps 7 digits only).
+define sub_rules
+$(call sub_of,$(1)): $(SCENEDIR)/$(SCENE).pov scenes/povray.ini $(call render_stamp_of,$(SCENE)) | $(if $(PREBUILT),,setup)
+	@printf 'render   %-10s sub-frame %s of %s at t = %s s\n' $(SCENE) $(1) $(ANIM_COUNT) $(2)
+	@t=$(ANIM_DIR)/.sub.$(1).tmp; \
+	bash scripts/render.sh $$< $$$$t-pov.exr $(RENDER_W) $(RENDER_H) $(call render_opts_of,$(SCENE)) Clock=$(2) && \
+	oiiotool $$$$t-pov.exr --attrib:type=string sis:time $(2) -o $$$$t.exr && \
+	rm -f $$$$t-pov.exr && mv -f $$$$t.exr $$@ || { rc=$$$$?; rm -f $$$$t-pov.exr $$$$t.exr; exit $$$$rc; }
+endef
+$(foreach p,$(ANIM_PAIRS),$(eval $(call sub_rules,$(firstword $(subst :, ,$(p))),$(lastword $(subst :, ,$(p))))))
+
+# $(call anim_rules,KIND): KIND-FPSfps/ frames, .mp4 and .webp
+define anim_rules
+$(ANIM_DIR)/.$(1)-$(FPS)fps.cmd: FORCE
+	$$(call stamp,$$@,$(anim_cmd_$(1)))
+
+$(ANIM_DIR)/$(1)-$(FPS)fps.mp4 $(ANIM_DIR)/$(1)-$(FPS)fps.webp &: $(anim_subs) $(SIPROJECT) $(ANIM_DIR)/.$(1)-$(FPS)fps.cmd
+	@d=$(ANIM_DIR)/$(1)-$(FPS)fps; t=$(ANIM_DIR)/.$(1)-$(FPS)fps.tmp; rm -rf $$$$t; mkdir -p $$$$t && \
+	$(SIPROJECT) $(anim_subs) --size $(RES_W)x$(RES_H) $(anim_cmd_$(1)) -o $$$$t/frame.#.png -q && \
+	first=$$$$(ls $$$$t | head -1 | sed 's/frame\.0*\([0-9][0-9]*\)\.png/\1/') && \
+	ffmpeg -nostdin -y -loglevel error -framerate $(FPS) -start_number $$$$first -i $$$$t/frame.%04d.png \
+	  -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' -c:v libx264 -pix_fmt yuv420p -crf 16 -movflags +faststart $$$$t.mp4 && \
+	ffmpeg -nostdin -y -loglevel error -framerate $(FPS) -start_number $$$$first -i $$$$t/frame.%04d.png \
+	  -c:v libwebp_anim -lossless 1 -loop 0 $$$$t.webp && \
+	rm -rf $$$$d && mv -f $$$$t $$$$d && mv -f $$$$t.mp4 $$$$d.mp4 && mv -f $$$$t.webp $$$$d.webp || \
+	{ rc=$$$$?; rm -rf $$$$t $$$$t.mp4 $$$$t.webp; exit $$$$rc; }
+	@printf 'frames   %-10s %-9s %s frames at %s fps -> %s\n' $(SCENE) $(1) $$$$(ls $(ANIM_DIR)/$(1)-$(FPS)fps | wc -l) $(FPS) $(ANIM_DIR)/$(1)-$(FPS)fps.mp4
+endef
+# The average only at the rendered rate: at another rate a frame's shutter
+# may hold no sub-frame (the frame-rate conversion is the space-time
+# projection's).
+ANIM_KINDS := spacetime $(if $(filter $(FPS),$(RENDER_FPS)),average)
+$(foreach k,$(ANIM_KINDS),$(eval $(call anim_rules,$(k))))
+
+$(ANIM_DIR)/index-$(FPS)fps.html: $(foreach k,$(ANIM_KINDS),$(ANIM_DIR)/$(k)-$(FPS)fps.webp) scripts/anim_page.py
+	@$(PYTHON) scripts/anim_page.py --dir $(ANIM_DIR) --fps $(FPS) --render-fps $(RENDER_FPS) --scene $(SCENE) \
+	  --spacetime '$(anim_cmd_spacetime)' $(if $(filter average,$(ANIM_KINDS)),--average '$(anim_cmd_average)') -o $@
+
+.PHONY: anim anim-subframes
+anim-subframes: $(anim_subs)
+anim: $(if $(PREBUILT),,build) $(ANIM_DIR)/index-$(FPS)fps.html
+	@echo "anim: $(ANIM_DIR)/index-$(FPS)fps.html (videos: $(ANIM_DIR)/spacetime-$(FPS)fps.mp4, average-$(FPS)fps.mp4)"
+
 endif
 
 FORCE:
@@ -679,6 +791,20 @@ docs:
 	  $(PYTHON) scripts/docs_picture.py $(OUT)/checker docs/img/methods.png && \
 	  echo "docs: docs/img/methods.png from $(OUT)/checker"; \
 	else echo "docs: no $(OUT)/checker images (run make): picture left as it is"; fi
+
+# make compare-anim [QUICK=1]: the animation study (scripts/compare_anim.py):
+# the sweep (scenes/sweep.pov, known in closed form at every time) as a slow
+# and a fast zone plate and slow bars, K = 2, 4, 8 sub-frames a frame at
+# 24 fps (make anim-subframes in $(OUT)/compare-anim), the sub-frame average
+# and space-time min-error of degrees 0, 1, 3 against the shutter's exact
+# integral, shutters of 180 and 360 degrees; frame-rate conversion 24 <-> 60
+# fps; siproject --fps's time and memory. $(OUT)/report/anim/ (QUICK:
+# $(OUT)/report-quick/anim/, 32 x 32, the slow zone plate, K = 2 and 4).
+.PHONY: compare-anim
+compare-anim: $(if $(PREBUILT),,build)
+	@PYTHONPATH=$(BUILD)/python $(PYTHON) scripts/compare_anim.py --work $(OUT)/compare-anim$(if $(QUICK),-quick) \
+	  --report $(OUT)/report$(if $(QUICK),-quick)/anim --siproject $(SIPROJECT) --jobs $(JOBS) \
+	  --zp-nyquist $(ZP_NYQUIST) $(if $(QUICK),--quick)
 
 # make compare-sparse [QUICK=1]: fewer rays than pixels (docs/studies.md):
 # the variational rule, the fit, the normalised sum and scipy's griddata of

@@ -11,7 +11,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
   python3 python3-venv python3-pip python3-dev
   chromium
-  time
+  time ffmpeg
   slurmctld slurmd slurm-client munge
 )
 

@@ -80,7 +80,8 @@ TEST_F(SpaceTime, StaticSceneIsTheSpatialResultAtEveryTime) {
   }
 }
 
-// Degree 0, a 360-degree box centred on the frame (phase -180) and K
+// Degree 0 with the hold model and a step of the frame interval, a
+// 360-degree box centred on the frame (phase -180) and K
 // sub-frames at the centres of K equal parts of each frame interval: frame f
 // is the projection of the plain average of its K sub-frames (the weights
 // are 1/K to 1e-13; both outputs float; 4e-6 as above).
@@ -92,7 +93,8 @@ TEST_F(SpaceTime, DegreeZeroFullShutterIsTheSubFrameAverage) {
   for (int k = 0; k < n * K; ++k) images.push_back(random_image(8, 8, 2, 100 + k));
   write_subframes(images, t);
   fs::create_directory(path("out"));
-  const Result r = run_tool(kTool, subs(n * K) + " --fps 24 --time-degree 0 --shutter 360:-180 "
+  const Result r = run_tool(kTool, subs(n * K) + " --fps 24 --time-degree 0 --time-model hold --time-step 0.041666666666666667 "
+                                   "--shutter 360:-180 "
                                    "--factor 2 -q -o " + path("out/f.#.exr"));
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(files_in(path("out")), std::size_t(n));
@@ -263,7 +265,10 @@ TEST_F(SpaceTime, BadSequencesAreRefusedLeavingNothing) {
       {all + " --fps 24 --frames 0-5", "--frames"},
       {all + " --fps 0", "--fps"},
       {all + " --fps 24 --time-degree 4", "--time-degree"},
+      {all + " --fps 24 --time-model spline", "--time-model"},
+      {all + " --fps 24 --time-step 0", "--time-step"},
       {all + " --shutter 90", "--fps"},
+      {all + " --time-model cubic", "--fps"},
   };
   for (const Case& c : cases) {
     const Result r = run_tool(kTool, c.args + o);

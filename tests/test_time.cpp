@@ -201,3 +201,70 @@ TEST(Time, ShutterTableFile) {
 }
 
 }  // namespace
+
+// The interpolating models reproduce polynomials of their degree (and of the
+// B-spline's, whichever is lower) at uneven times over the whole span, ends
+// included (their projection is on the span, not mirrored), where the hold
+// does so only up to O(h^2). Rounding: sums of ~250 terms of size ~1 through
+// a Gram solve of condition ~1e2: 1e-11 is ample.
+TEST(Time, InterpolatingModelsReproduceTheirPolynomials) {
+  const double S = 0.1;
+  const int steps = 30, per = 4;
+  std::vector<double> t;
+  for (int k = 0; k < steps * per; ++k)  // uneven: each inside its own cell
+    t.push_back(S * (k + 0.5 + 0.35 * std::sin(1.7 * k)) / per);
+  double a, b;
+  time_span(t, a, b);
+  for (TimeModel tm : {TimeModel::Linear, TimeModel::Cubic}) {
+    const int q = tm == TimeModel::Linear ? 1 : 3;
+    for (int D = 0; D <= 3; ++D) {
+      for (double step : {S, S / per, 0.37 * S}) {
+        TimeProjection p(t, D, step, tm);
+        for (int n = 0; n <= std::min(q, D); ++n) {
+          auto f = [&](double x) { return std::pow(x / (steps * S) - 0.5, n) * 2; };
+          std::vector<double> v(t.size());
+          for (size_t k = 0; k < t.size(); ++k) v[k] = f(t[k]);
+          const std::vector<double> c = p.coefficients(v);
+          double worst = 0;
+          for (double x = a; x <= b; x += 0.00731)
+            worst = std::max(worst, std::abs(model(p, c, x) - f(x)));
+          EXPECT_LT(worst, 1e-11) << time_model_name(tm) << " D " << D << " n " << n << " step "
+                                  << step;
+        }
+      }
+    }
+  }
+}
+
+// A degree above the model's is not reproduced: the models differ, and the
+// hold's O(h^2) error on a quadratic is what the linear and cubic models remove
+// in part and in whole (D = 3, quadratic, 4 sub-frames per step).
+TEST(Time, HigherModelsReduceTheHoldsError) {
+  const double S = 0.1;
+  const std::vector<double> t = centres(0, S, 60, 4);
+  auto f = [](double x) { return std::pow(x / 6 - 0.5, 2) * 2; };
+  std::vector<double> v(t.size());
+  for (size_t k = 0; k < t.size(); ++k) v[k] = f(t[k]);
+  double err[3];
+  int i = 0;
+  for (TimeModel tm : {TimeModel::Hold, TimeModel::Linear, TimeModel::Cubic}) {
+    TimeProjection p(t, 3, S, tm);
+    const std::vector<double> c = p.coefficients(v);
+    double worst = 0;
+    for (double x = 2.5; x <= 3.5; x += 0.00731)
+      worst = std::max(worst, std::abs(model(p, c, x) - f(x)));
+    err[i++] = worst;
+  }
+  EXPECT_GT(err[0], 1e-6);
+  EXPECT_GT(err[1], 1e-6);
+  EXPECT_LT(err[2], 1e-9);
+}
+
+TEST(Time, ModelSpellings) {
+  EXPECT_EQ(parse_time_model("hold"), TimeModel::Hold);
+  EXPECT_EQ(parse_time_model("linear"), TimeModel::Linear);
+  EXPECT_EQ(parse_time_model("cubic"), TimeModel::Cubic);
+  EXPECT_THROW(parse_time_model("spline"), std::invalid_argument);
+  for (TimeModel m : {TimeModel::Hold, TimeModel::Linear, TimeModel::Cubic})
+    EXPECT_EQ(parse_time_model(time_model_name(m)), m);
+}

@@ -93,8 +93,8 @@ struct Options {
   bool mip = false;
   // --fps: space-time projection of sub-frames (sis/spacetime.h)
   std::optional<double> fps;
-  std::string shutter = "180:0", shutter_curve = "box", times;
-  int time_degree = 1;
+  std::string shutter = "180:0", shutter_curve = "box", times, time_model = "cubic";
+  int time_degree = 3;
   double time_step = 0;
   bool time_given = false;  // a temporal option given (they need --fps)
 };
@@ -676,6 +676,11 @@ int run_spacetime(const Options& o) {
   }
   so.degree = o.time_degree;
   so.step = o.time_step;
+  try {
+    so.model = parse_time_model(o.time_model);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
   if (!o.frames.empty()) {
     try {
       so.frames = parse_frame_range(o.frames);
@@ -749,15 +754,22 @@ int run_spacetime(const Options& o) {
           {"sis:display", f.display.name()},
           {"sis:boundary", boundary_name(f.coefficients.boundary)},
           {"sis:lattice", space_name(f.coefficients.space)},
+          {"sis:input_transfer", f.coefficients.input.transfer.name()},
+          {"sis:highlight_compress", f.coefficients.highlight_compressed ? "1" : "0"},
           {"sis:clamp", clamp_name(r.clamp)},
           {"sis:output_min", std::to_string(after.min)},
           {"sis:output_max", std::to_string(after.max)},
+          {"sis:negative_before_clamp", std::to_string(f.final.before.negative)},
+          {"sis:out_of_range_before_clamp", f.final.own_range
+                                                 ? std::to_string(f.final.before.out_of_range)
+                                                 : std::string("unknown")},
           {"sis:half_clamped", std::to_string(half_clamped)},
           {"sis:time", metadata_number(f.time)},
           {"sis:fps", metadata_number(so.fps)},
           {"sis:shutter", o.shutter},
           {"sis:shutter_curve", o.shutter_curve},
           {"sis:time_degree", std::to_string(so.degree)},
+          {"sis:time_model", time_model_name(so.model)},
           {"sis:time_step", metadata_number(plan.options.step)},
           {"sis:input", paths.front() + " and " + std::to_string(paths.size() - 1) + " more sub-frames"},
           {"Software", "siproject"},
@@ -785,7 +797,7 @@ int run_spacetime(const Options& o) {
 int run_jobs(const Options& o) {
   if (o.fps) return run_spacetime(o);
   if (o.time_given)
-    throw UsageError("--shutter, --shutter-curve, --time-degree, --time-step and --times need "
+    throw UsageError("--shutter, --shutter-curve, --time-degree, --time-step, --time-model and --times need "
                      "--fps (the output frame rate of a space-time projection)");
   const std::vector<Job> jobs = plan_jobs(o);
   for (std::size_t i = 0; i < jobs.size(); ++i) {
@@ -861,7 +873,22 @@ int main(int argc, char** argv) try {
   auto* t3 = app.add_option("--time-degree", o.time_degree,
                             "with --fps: degree 0..3 of the temporal B-spline")->capture_default_str();
   auto* t4 = app.add_option("--time-step", o.time_step,
-                            "with --fps: temporal lattice step in seconds [default: 1/fps]");
+                            "with --fps: temporal lattice step in seconds [default: the sub-frames' mean "
+                            "spacing]")
+                ->check([](const std::string& v) {
+                  double x = 0;
+                  try {
+                    x = std::stod(v);
+                  } catch (const std::exception&) {
+                  }
+                  return x > 0 && std::isfinite(x)
+                             ? std::string()
+                             : "expected a positive number of seconds, not '" + v + "'";
+                });
+  auto* t6 = app.add_option("--time-model", o.time_model,
+                            "with --fps: how the sub-frames stand for the scene between their "
+                            "times in the temporal acquisition: hold (each over its own cell), "
+                            "linear or cubic (interpolated)")->capture_default_str();
   auto* t5 = app.add_option("--times", o.times,
                             "with --fps: the sub-frames' times t0,t1,... in seconds (one per input), "
                             "instead of their sis:time attributes");
@@ -1009,7 +1036,8 @@ int main(int argc, char** argv) try {
   if (const auto code = sis::cli::parse(app, argc, argv)) return *code;
   o.display_given = app.count("--display") > 0;
   o.clamp_given = app.count("--clamp") > 0;
-  o.time_given = t1->count() + t2->count() + t3->count() + t4->count() + t5->count() > 0;
+  o.time_given = t1->count() + t2->count() + t3->count() + t4->count() + t5->count() +
+                 t6->count() > 0;
   remove_staged_files_on_signals();
   Settings& st = o.settings;
   st.generator_given = g->count() > 0;

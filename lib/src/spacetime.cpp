@@ -66,7 +66,6 @@ SpaceTimePlan plan_frames(const std::vector<std::string>& paths, std::vector<dou
     throw RequestError("--time-degree " + std::to_string(options.degree) + ": outside [0, 3]");
   if (options.step != 0 && (!(options.step > 0) || !std::isfinite(options.step)))
     throw RequestError("--time-step " + num(options.step) + ": a positive number of seconds");
-  p.options.step = options.step > 0 ? options.step : 1 / options.fps;
   if (paths.size() < 2)
     throw RequestError("--fps: " + std::to_string(paths.size()) +
                        " sub-frame; space-time projection needs at least two");
@@ -102,6 +101,10 @@ SpaceTimePlan plan_frames(const std::vector<std::string>& paths, std::vector<dou
                          paths[k - 1] + "'s " + num(times[k - 1]) + " (sub-frames in time order)");
   }
   p.times = times;
+  // the default step: the sub-frames' mean spacing (their own spacing when
+  // regular), the finest lattice they determine
+  p.options.step = options.step > 0 ? options.step
+                                    : (times.back() - times.front()) / double(times.size() - 1);
   const Shutter& s = options.shutter;
   double a, b;
   time_span(times, a, b);
@@ -115,7 +118,7 @@ SpaceTimePlan plan_frames(const std::vector<std::string>& paths, std::vector<dou
   } else {
     p.frames = options.frames;
   }
-  const TimeProjection tp(times, options.degree, p.options.step);
+  const TimeProjection tp(times, options.degree, p.options.step, options.model);
   for (long f : p.frames) {
     const double T = f / options.fps;
     std::vector<double> u;

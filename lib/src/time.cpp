@@ -199,8 +199,97 @@ std::vector<double> time_quadrature_weights(const std::vector<double>& t) {
   return q;
 }
 
-TimeProjection::TimeProjection(std::vector<double> times, int degree, double step)
-    : t_(std::move(times)), degree_(degree), step_(step) {
+const char* time_model_name(TimeModel model) {
+  switch (model) {
+    case TimeModel::Hold: return "hold";
+    case TimeModel::Linear: return "linear";
+    case TimeModel::Cubic: return "cubic";
+  }
+  return "?";
+}
+
+TimeModel parse_time_model(const std::string& spelling) {
+  if (spelling == "hold") return TimeModel::Hold;
+  if (spelling == "linear") return TimeModel::Linear;
+  if (spelling == "cubic") return TimeModel::Cubic;
+  throw std::invalid_argument("--time-model: '" + spelling +
+                              "' is not a model (hold, linear or cubic)");
+}
+
+namespace {
+
+// Acquisition of the Linear and Cubic models on [lo, hi] (the span widened
+// to the B-splines' knots, lo and hi knots): A[i][k] = (1/S) integral over
+// [lo, hi] of L_k(t) b_D(t/S - m) dt for m = first + i, over the model's
+// pieces [t_k, t_k+1] (and [lo, t_0], [t_K-1, hi] on the nearest gap's
+// polynomial, extended), L_k the Lagrange basis of the piece's nodes. Each
+// piece of the integrand is a polynomial of degree <= 3 + 3 between the
+// B-spline's knots: gauss4 is exact.
+void acquire_interpolated(const std::vector<double>& t, double lo_all, double hi_all, int degree,
+                          double step, int first, int count, TimeModel model,
+                          std::vector<std::vector<double>>& A) {
+  const int K = static_cast<int>(t.size());
+  const int q = model == TimeModel::Linear ? 1 : std::min(3, K - 1);  // nodes q + 1
+  const double r = 0.5 * (degree + 1);
+  for (int piece = -1; piece < K; ++piece) {
+    // piece -1: [lo, t_0]; piece k: [t_k, t_k+1]; piece K-1: [t_K-1, hi]
+    const double lo = piece < 0 ? lo_all : t[piece];
+    const double hi = piece + 1 >= K ? hi_all : t[piece + 1];
+    if (!(hi > lo)) continue;
+    const int gap = std::clamp(piece, 0, K - 2);                  // the gap whose polynomial
+    const int j0 = std::clamp(gap - (q - 1) / 2, 0, K - 1 - q);  // nodes j0 .. j0 + q
+    auto basis = [&](int k, double x) {
+      double v = 1;
+      for (int j = j0; j <= j0 + q; ++j)
+        if (j != k) v *= (x - t[j]) / (t[k] - t[j]);
+      return v;
+    };
+    for (int i = 0; i < count; ++i) {
+      const int m = first + i;
+      if (!(step * (m + r) > lo && step * (m - r) < hi)) continue;
+      std::vector<double> bp;
+      for (int j = 0; j <= degree + 1; ++j) bp.push_back(step * (m - r + j));
+      for (int k = j0; k <= j0 + q; ++k)
+        A[i][k] += piecewise_integral(
+                       [&](double x) { return basis(k, x) * bspline(degree, x / step - m); }, lo,
+                       hi, bp) /
+                   step;
+    }
+  }
+}
+
+// Solves G P = A in place (Gaussian elimination with partial pivoting; the
+// systems are small: the span over the step plus degree + 1 rows).
+void solve_in_place(std::vector<std::vector<double>>& G, std::vector<std::vector<double>>& P) {
+  const int n = static_cast<int>(G.size());
+  const size_t K = P.empty() ? 0 : P[0].size();
+  for (int c = 0; c < n; ++c) {
+    int p = c;
+    for (int i = c + 1; i < n; ++i)
+      if (std::abs(G[i][c]) > std::abs(G[p][c])) p = i;
+    std::swap(G[c], G[p]);
+    std::swap(P[c], P[p]);
+    for (int i = c + 1; i < n; ++i) {
+      const double f = G[i][c] / G[c][c];
+      if (f == 0) continue;
+      for (int j = c; j < n; ++j) G[i][j] -= f * G[c][j];
+      for (size_t k = 0; k < K; ++k) P[i][k] -= f * P[c][k];
+    }
+  }
+  for (int c = n - 1; c >= 0; --c) {
+    for (size_t k = 0; k < K; ++k) {
+      double s = P[c][k];
+      for (int j = c + 1; j < n; ++j) s -= G[c][j] * P[j][k];
+      P[c][k] = s / G[c][c];
+    }
+  }
+}
+
+}  // namespace
+
+TimeProjection::TimeProjection(std::vector<double> times, int degree, double step,
+                               TimeModel model)
+    : t_(std::move(times)), degree_(degree), step_(step), model_(model) {
   if (degree < 0 || degree > kMaxTimeDegree)
     throw std::invalid_argument("TimeProjection(): time degree " + std::to_string(degree) +
                                 " outside [0, 3]");
@@ -210,11 +299,48 @@ TimeProjection::TimeProjection(std::vector<double> times, int degree, double ste
   double a, b;
   time_span(t_, a, b);
   const double r = 0.5 * (degree + 1);
+  const size_t K = t_.size();
+  if (model_ != TimeModel::Hold) {
+    // The interpolating models: the least-squares projection of the model on
+    // [lo, hi], the span widened to the nearest knots of the B-splines
+    // (knots at S (n + delta), delta 0 for odd degrees, 1/2 for even ones),
+    // the model extended there by its end polynomials; every B-spline meeting
+    // (lo, hi) overlaps it by a whole knot interval or more (a well-posed
+    // Gram matrix), and polynomials the model and the space both hold are
+    // reproduced on the whole span, ends included.
+    const double delta = degree % 2 ? 0.0 : 0.5;
+    const int na = static_cast<int>(std::floor(a / step - delta));
+    const int nb = static_cast<int>(std::ceil(b / step - delta));
+    const double lo = step * (na + delta), hi = step * (nb + delta);
+    first_ = na + 1 - (degree + 1) / 2;
+    const int last = nb + degree / 2;
+    count_ = last - first_ + 1;
+    std::vector<std::vector<double>> A(count_, std::vector<double>(K, 0.0));
+    acquire_interpolated(t_, lo, hi, degree, step, first_, count_, model_, A);
+    std::vector<std::vector<double>> G(count_, std::vector<double>(count_, 0.0));
+    for (int i = 0; i < count_; ++i)
+      for (int j = std::max(0, i - degree); j <= std::min(count_ - 1, i + degree); ++j) {
+        const int m = first_ + i, n = first_ + j;
+        const double s0 = std::max(lo, step * (std::max(m, n) - r));
+        const double s1 = std::min(hi, step * (std::min(m, n) + r));
+        if (!(s1 > s0)) continue;
+        std::vector<double> bp;
+        for (int k = 0; k <= degree + 1; ++k) bp.push_back(step * (m - r + k));
+        G[i][j] = piecewise_integral(
+                      [&](double x) {
+                        return bspline(degree, x / step - m) * bspline(degree, x / step - n);
+                      },
+                      s0, s1, bp) /
+                  step;
+      }
+    P_ = std::move(A);
+    solve_in_place(G, P_);
+    return;
+  }
   // every m with (m - r, m + r) meeting (a/S, b/S)
   first_ = static_cast<int>(std::floor(a / step - r)) + 1;
   const int last = static_cast<int>(std::ceil(b / step + r)) - 1;
   count_ = last - first_ + 1;
-  const size_t K = t_.size();
   // acquisition: each sub-frame held over its own cell, the cells mirrored
   // about a and b; (1/S) integral of b_D(t/S - m) over a cell, exactly, from
   // the cumulative B-spline
@@ -242,29 +368,8 @@ TimeProjection::TimeProjection(std::vector<double> times, int degree, double ste
   std::vector<std::vector<double>> G(count_, std::vector<double>(count_, 0.0));
   for (int i = 0; i < count_; ++i)
     for (int d = -degree; d <= degree; ++d) G[i][fold(i + d)] += ac[std::abs(d)];
-  // Solve G P = A (Gaussian elimination with partial pivoting; count is small:
-  // the span over the step plus degree + 1).
-  P_ = A;
-  for (int c = 0; c < count_; ++c) {
-    int p = c;
-    for (int i = c + 1; i < count_; ++i)
-      if (std::abs(G[i][c]) > std::abs(G[p][c])) p = i;
-    std::swap(G[c], G[p]);
-    std::swap(P_[c], P_[p]);
-    for (int i = c + 1; i < count_; ++i) {
-      const double f = G[i][c] / G[c][c];
-      if (f == 0) continue;
-      for (int j = c; j < count_; ++j) G[i][j] -= f * G[c][j];
-      for (size_t k = 0; k < K; ++k) P_[i][k] -= f * P_[c][k];
-    }
-  }
-  for (int c = count_ - 1; c >= 0; --c) {
-    for (size_t k = 0; k < K; ++k) {
-      double s = P_[c][k];
-      for (int j = c + 1; j < count_; ++j) s -= G[c][j] * P_[j][k];
-      P_[c][k] = s / G[c][c];
-    }
-  }
+  P_ = std::move(A);
+  solve_in_place(G, P_);
 }
 
 std::vector<double> TimeProjection::coefficients(const std::vector<double>& f) const {

@@ -31,6 +31,7 @@
 #include "sis/settings.h"
 #include "sis/space.h"
 #include "sis/staged_file.h"
+#include "sis/time.h"
 
 namespace py = pybind11;
 using namespace sis;
@@ -757,6 +758,16 @@ PYBIND11_MODULE(_core, m) {
                        threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency())));
     }
     return out;
+  });
+  m.def("_frame_weights", [](std::vector<double> times, double fps, double T,
+                             const std::string& shutter, const std::string& curve, int degree,
+                             double step, const std::string& model, bool conventional) {
+    return translated(false, [&] {
+      const Shutter s = parse_shutter(shutter, curve);
+      if (conventional) return conventional_frame_weights(times, s, T, fps);
+      const TimeProjection p(times, degree, step, parse_time_model(model));
+      return frame_weights(p, s, T, fps);
+    });
   });
   m.def("_load", &load_file);
   m.def("_highpass_shares", [](FloatArray a, std::vector<double> cutoffs) {

@@ -16,8 +16,9 @@ namespace sis {
 struct SpaceTimeOptions {
   double fps = 0;           // output frame rate (> 0)
   Shutter shutter;          // open on [T + P/360/fps, T + (P + A)/360/fps)
-  int degree = 1;           // temporal B-spline degree, 0..3
-  double step = 0;          // temporal lattice step in seconds (0: 1/fps)
+  int degree = 3;           // temporal B-spline degree, 0..3
+  double step = 0;          // temporal lattice step in seconds (0: the sub-frames' mean spacing)
+  TimeModel model = TimeModel::Cubic;  // the sub-frames' model in the acquisition
   std::vector<long> frames; // output frame numbers, time k/fps (empty: every whole frame inside)
 };
 

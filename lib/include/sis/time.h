@@ -15,6 +15,19 @@ constexpr int kMaxTimeDegree = 3;
 
 enum class ShutterCurve { Box, Tent, Cubic, Table };
 
+// How the sub-frames, point samples in time, stand for f between their
+// times in the temporal acquisition: Hold (each sub-frame constant over its
+// own cell, what the plain average assumes), Linear (the piecewise-linear
+// interpolant of the sub-frames) or Cubic (on each gap between sub-frames the
+// cubic through the four nearest sub-frames, Lagrange's; uneven times
+// allowed; three sub-frames give the quadratic, two the line). The first and
+// last cells are covered by the nearest gap's polynomial. Hold reproduces
+// constants, Linear polynomials of degree 1, Cubic of degree 3.
+enum class TimeModel { Hold, Linear, Cubic };
+const char* time_model_name(TimeModel model);  // "hold" | "linear" | "cubic"
+// Throws std::invalid_argument naming --time-model on another spelling.
+TimeModel parse_time_model(const std::string& spelling);
+
 // A shutter: open on [T + phase/360/fps, T + (phase+angle)/360/fps) for the
 // output frame at time T, with a weight curve over the open interval.
 struct Shutter {
@@ -53,19 +66,24 @@ void check_times(const std::vector<double>& t);
 // The temporal projection of K sub-frames at times t onto the degree-D
 // B-splines of step S: coefficients m = first .. first+count-1 (every
 // B-spline whose support meets the span). Acquisition
-//   c~[m] = (1/S) sum_k f(t_k) integral over cell k of b_D(t/S - m) dt,
-// each sub-frame held over its own cell (time_quadrature_weights; a constant
-// in time is exact for uneven times), the cells mirrored about both ends of
-// the span (exact while the span is longer than a B-spline support); then the
+//   c~[m] = (1/S) integral g(t) b_D(t/S - m) dt,
+// g the model of the sub-frames (TimeModel) on the span, mirrored about both
+// of its ends (exact while the span is longer than a B-spline support); with
+// Hold, c~[m] = (1/S) sum_k f(t_k) integral over cell k of b_D(t/S - m) dt
+// (time_quadrature_weights; a constant in time is exact for uneven times),
+// from the cumulative B-spline; with Linear and Cubic each polynomial piece
+// of g times b_D is integrated exactly (Gauss-Legendre, 4 points); then the
 // prefilter: the Gram system sum_n a[m-n] c[n] = c~[m] (a = autocorrelation
 // of b_D), indices outside the range folded back by the mirror rule
 // (c[first-1-j] = c[first+j]), solved exactly (banded LU).
 class TimeProjection {
  public:
-  TimeProjection(std::vector<double> times, int degree, double step);
+  TimeProjection(std::vector<double> times, int degree, double step,
+                 TimeModel model = TimeModel::Hold);
   const std::vector<double>& times() const { return t_; }
   int degree() const { return degree_; }
   double step() const { return step_; }
+  TimeModel model() const { return model_; }
   int first() const { return first_; }
   int count() const { return count_; }
   // matrix()[m - first][k]: coefficient m's weight of sub-frame k.
@@ -77,6 +95,7 @@ class TimeProjection {
   std::vector<double> t_;
   int degree_;
   double step_;
+  TimeModel model_;
   int first_ = 0, count_ = 0;
   std::vector<std::vector<double>> P_;
 };

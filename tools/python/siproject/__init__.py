@@ -49,6 +49,7 @@ __all__ = [
     "band_cuts",
     "sample_positions",
     "refine",
+    "frame_weights",
     "Coefficients",
     "highpass_share",
     "rms_difference",
@@ -612,6 +613,45 @@ def refine(input: Union[str, "os.PathLike[str]"], *, rays: float, refine_rays: O
     sh = _number("share", share, optional=True)
     return _core._refine(path, r, rr, sh, _whole("tile", tile), _text("estimator", estimator),
                          _threads(threads))
+
+
+def frame_weights(times: Sequence[float], *, fps: float, time: float, shutter: str = "180:0",
+                  shutter_curve: str = "box", degree: int = 3, step: Optional[float] = None,
+                  model: str = "cubic", method: str = "min-error") -> np.ndarray:
+    """The weights of the sub-frames at `times` (seconds, increasing) in the
+    frame at `time` seconds of a space-time projection (siproject --fps;
+    docs/design.md section 16): the frame is sum_k w[k] times sub-frame k's
+    spatial coefficients (or, the display being linear, its image), so
+    frames from the same sub-frames differ by their weights alone.
+
+    fps: the output rate (it sets the shutter's length); shutter: "ANGLE[:PHASE]"
+    in degrees (siproject --shutter); shutter_curve: "box", "tent", "cubic" or a
+    table file; degree: the temporal B-spline's, 0..3; step: the temporal
+    lattice step in seconds (None: the sub-frames' mean spacing, as siproject's
+    default); model: how the sub-frames stand
+    for the scene between their times, "hold", "linear" or "cubic"
+    (siproject --time-model); method: "min-error", or "conventional" for the
+    average of the sub-frames within the shutter, weighted by the curve.
+    A float64 array of len(times), summing to 1.
+    """
+    t = [float(x) for x in np.asarray(times, dtype=np.float64).ravel()]
+    r = _number("fps", fps)
+    T = _number("time", time)
+    s = _number("step", step, optional=True)
+    m = _text("method", method)
+    if m not in ("min-error", "conventional"):
+        raise ValueError(f"method={method!r}: expected \"min-error\" or \"conventional\"")
+    if not (r > 0 and math.isfinite(r)):
+        raise ValueError(f"fps={fps!r}: not a positive number")
+    if s is not None and not (s > 0 and math.isfinite(s)):
+        raise ValueError(f"step={step!r}: not a positive number of seconds")
+    return np.asarray(_core._frame_weights(t, r, T, _text("shutter", shutter),
+                                           _text("shutter_curve", shutter_curve),
+                                           _whole("degree", degree, (0, 3)),
+                                           (t[-1] - t[0]) / (len(t) - 1) if s is None and len(t) > 1
+                                           else (1.0 / r if s is None else s), _text("model", model),
+                                           m == "conventional"), dtype=np.float64)
+
 
 
 def _path(name: str, path) -> str:
