@@ -198,9 +198,40 @@ endif
 ifneq ($(shell echo '$(TILES)' | grep -Ex '[1-9][0-9]*'),$(TILES))
 $(error TILES=$(TILES): expected a positive whole number)
 endif
-ifeq ($(filter $(SAMPLES),regular jitter sobol),)
-$(error SAMPLES=$(SAMPLES): expected regular, jitter or sobol)
+ifeq ($(filter $(SAMPLES),regular jitter sobol adaptive),)
+$(error SAMPLES=$(SAMPLES): expected regular, jitter, sobol or adaptive)
 endif
+# SAMPLES=adaptive (docs/design.md section 17): a sobol first pass of
+# ADAPT_BASE rays per pixel (its render is make SAMPLES=sobol's at FACTOR =
+# sqrt(ADAPT_BASE)), sirays refine's tiles for the budget of RAYS rays per
+# pixel, and the second pass of their extra rays.
+ifeq ($(SAMPLES),adaptive)
+ADAPTIVE := 1
+ifeq ($(shell echo '$(RAYS)' | grep -Ex '[0-9]+([.][0-9]+)?'),)
+$(error SAMPLES=adaptive needs RAYS=N, the rays per output pixel over the whole frame (a number > 0), e.g. RAYS=16)
+endif
+ADAPT_BASE ?= $(shell awk 'BEGIN { print ($(RAYS) < 4) ? 1 : ($(RAYS) >= 64 ? 16 : 4) }')
+ADAPT_FACTOR := $(shell awk 'BEGIN { b = "$(ADAPT_BASE)" + 0; s = int(sqrt(b) + 0.5); if (b >= 1 && s * s == b && "$(ADAPT_BASE)" ~ /^[0-9]+$$/) print s }')
+ifeq ($(ADAPT_FACTOR),)
+$(error ADAPT_BASE=$(ADAPT_BASE): the first pass's rays per pixel must be the square of a whole number (1, 4, 9, 16...): the sobol render of a whole FACTOR)
+endif
+ifneq ($(shell awk 'BEGIN { print ($(RAYS) >= $(ADAPT_BASE)) ? "ok" : "" }'),ok)
+$(error RAYS=$(RAYS) is below the first pass's ADAPT_BASE=$(ADAPT_BASE) rays per pixel: the budget must cover the base pattern)
+endif
+ifneq ($(ADAPT_RAYS)$(ADAPT_SHARE),)
+ifneq ($(ADAPT_RAYS),)
+ifneq ($(ADAPT_SHARE),)
+$(error ADAPT_RAYS and ADAPT_SHARE: give one (the refined tiles' rays per pixel, or the share of the frame refined))
+endif
+endif
+endif
+override FACTOR := $(ADAPT_FACTOR)
+PATTERN := sobol
+else
+PATTERN := $(SAMPLES)
+endif
+ADAPT_TILE ?= 8
+ADAPT_ESTIMATOR ?= residual
 ifneq ($(shell echo '$(SEED)' | grep -Ex '[0-9]+'),$(SEED))
 $(error SEED=$(SEED): expected a whole number >= 0)
 endif
@@ -248,8 +279,8 @@ endef
 
 # SAMPLES other than regular: the pattern's tag in the render's and the
 # results' names; the results go to $(OUT)/SCENE-SAMPLES-sSEED.
-SAMPLES_TAG := $(if $(filter regular,$(SAMPLES)),,-$(SAMPLES)-s$(SEED))
-dir_of = $(OUT)/$(1)$(SAMPLES_TAG)
+SAMPLES_TAG := $(if $(filter regular,$(PATTERN)),,-$(PATTERN)-s$(SEED))
+dir_of = $(OUT)/$(1)$(if $(ADAPTIVE),-adaptive-r$(RAYS)-s$(SEED),$(SAMPLES_TAG))
 render_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).exr
 stats_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).stats
 render_stamp_of = $(OUT)/render/.$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).cmd
@@ -268,7 +299,16 @@ band_y0 = $(shell i=$$(( $(1) )); \
   elif [ $(engine_bands) -ge $(TILES) ]; then echo $$(( $(BAND_ROWS) * ( i * $(engine_bands) / $(TILES) ) )); \
   else echo $$(( i * $(RENDER_H) / $(TILES) )); fi)
 inputs_of = $(if $(filter 1,$(TILES))$(SAMPLES_TAG),$(call render_of,$(1)),$(foreach i,$(band_indices),$(call band_of,$(1),$(i))))
-method_cmd_of = $(strip $(SIPROJECT) $(call inputs_of,$(1)) $(if $(filter 1,$(TILES))$(SAMPLES_TAG),,--bands) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(SIFLAGS))
+method_cmd_of = $(strip $(SIPROJECT) $(call inputs_of,$(1)) $(if $(filter 1,$(TILES))$(SAMPLES_TAG),,--bands) $(if $(ADAPTIVE),--refined $(call extra_of,$(1))) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(SIFLAGS))
+# SAMPLES=adaptive: the refinement (sirays refine), every tile's estimate,
+# the second pass's render (the extra rays) and its statistics.
+adapt_name_of = $(OUT)/render/$(1)-$(RES_TAG)-adaptive-r$(RAYS)-s$(SEED)
+refine_of = $(call adapt_name_of,$(1)).refine.txt
+estimates_of = $(call adapt_name_of,$(1)).estimates.exr
+extra_of = $(call adapt_name_of,$(1)).exr
+extra_stats_of = $(call adapt_name_of,$(1)).stats
+adapt_stamp_of = $(dir $(call adapt_name_of,$(1))).$(notdir $(call adapt_name_of,$(1))).cmd
+REFINE_OPTS = --rays $(RAYS) $(if $(ADAPT_RAYS),--refine-rays $(ADAPT_RAYS)) $(if $(ADAPT_SHARE),--share $(ADAPT_SHARE)) --tile $(ADAPT_TILE) --estimator $(ADAPT_ESTIMATOR)
 summary_of = $(call dir_of,$(1))/summary.txt
 
 # $(call band_rules,SCENE,I,Y0,Y1): band I, render rows [Y0, Y1)
@@ -292,12 +332,12 @@ mesh_indices := $(shell seq 0 $$(( $(MESH_BANDS) - 1 )))
 mesh_band_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG)-mesh$(2)of$(MESH_BANDS).exr
 mesh_stats_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG)-mesh$(2)of$(MESH_BANDS).stats
 mesh_y1 = $(shell echo $$(( ( $(1) + 1 ) * $(MESH_ROWS) < $(RENDER_H) ? ( $(1) + 1 ) * $(MESH_ROWS) : $(RENDER_H) )))
-PATTERN_OPTS := --pattern $(SAMPLES) --seed $(SEED) --size $(RES_W)x$(RES_H) --factor $(FACTOR)
+PATTERN_OPTS := --pattern $(PATTERN) --seed $(SEED) --size $(RES_W)x$(RES_H) --factor $(FACTOR)
 
 # $(call mesh_rules,SCENE,I,Y0,Y1)
 define mesh_rules
 $(call mesh_band_of,$(1),$(2)) $(call mesh_stats_of,$(1),$(2)) &: $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) $(SIRAYS) | $(if $(PREBUILT),,setup)
-	@printf 'render   %-10s %s rays, band %s of %s: rows %s to %s of %s x %s\n' $(1) $(SAMPLES) $(2) $(MESH_BANDS) $(3) $$$$(( $(4) - 1 )) $(RENDER_W) $(RENDER_H)
+	@printf 'render   %-10s %s rays, band %s of %s: rows %s to %s of %s x %s\n' $(1) $(PATTERN) $(2) $(MESH_BANDS) $(3) $$$$(( $(4) - 1 )) $(RENDER_W) $(RENDER_H)
 	@b=$(call mesh_band_of,$(1),$(2)); t=$$$$(dirname $$$$b)/.$$$$(basename $$$$b).tmp; \
 	t0=$$$$(date +%s.%N) && \
 	$(SIRAYS) mesh $$< -o $$$$t.pov $(PATTERN_OPTS) --rows $(3):$(4) && \
@@ -322,7 +362,7 @@ $(call render_of,$(1)) $(call stats_of,$(1)) &: $(SCENEDIR)/$(1).pov scenes/povr
 else
 # The render's statistics: the sums over its bands.
 $(call render_of,$(1)) $(call stats_of,$(1)) &: $(foreach i,$(mesh_indices),$(call mesh_band_of,$(1),$(i))) $(SIRAYS)
-	@printf 'assemble %-10s %s x %s %s rays (seed %s, %s bands) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(SAMPLES) $(SEED) $(MESH_BANDS) $(call render_of,$(1))
+	@printf 'assemble %-10s %s x %s %s rays (seed %s, %s bands) -> %s\n' $(1) $(RENDER_W) $(RENDER_H) $(PATTERN) $(SEED) $(MESH_BANDS) $(call render_of,$(1))
 	@t=$(dir $(call stats_of,$(1))).$(notdir $(call stats_of,$(1))).tmp; \
 	awk '$$$$1 != "wall_runs" { sum[$$$$1] += $$$$2; if (!($$$$1 in seen)) { seen[$$$$1] = 1; order[++n] = $$$$1 } } \
 	  END { for (i = 1; i <= n; i++) print order[i], sum[order[i]]; print "bands", $(MESH_BANDS) }' \
@@ -339,8 +379,46 @@ $(call dir_of,$(1))/summary.txt $(call dir_of,$(1))/summary.csv &: $(foreach m,$
 	  --sizes '$(RES_W) $(RES_H) $(RENDER_W) $(RENDER_H)' --simetrics '$(SIMETRICS)' --cutoffs '$(CUTOFFS)' $(METHODS)
 
 # The page of the scene's images side by side, two enlarged crops each, and the summary.
-$(call dir_of,$(1))/index.html: $(foreach m,$(METHODS),$(call dir_of,$(1))/$(m).png) $(call dir_of,$(1))/summary.txt scripts/scene_page.py
+$(call dir_of,$(1))/index.html: $(foreach m,$(METHODS),$(call dir_of,$(1))/$(m).png) $(if $(ADAPTIVE),$(call dir_of,$(1))/rays.png) $(call dir_of,$(1))/summary.txt scripts/scene_page.py
 	@$$(PYTHON) scripts/scene_page.py $(call dir_of,$(1)) $(foreach m,$(METHODS),'$(m)=$(METHOD_OPTS_$(m))')
+endef
+
+# $(call adaptive_rules,SCENE): the refinement from the first pass, then
+# the second pass: the extra rays through the mesh camera in bands of at
+# most MESH_RAYS rays (one POV-Ray process each: one for any refinement
+# under MESH_RAYS rays), assembled with the refinement in their metadata;
+# with no tile refined, no ray is traced and the file holds none. The
+# statistics: the bands' sums, with refine_s (sirays refine's wall time).
+# The picture of where the rays went: rays.png beside the images.
+define adaptive_rules
+$(call adapt_stamp_of,$(1)): FORCE
+	$$(call stamp,$$@,$(REFINE_OPTS))
+
+$(call refine_of,$(1)) $(call estimates_of,$(1)) &: $(call render_of,$(1)) $(SIRAYS) $(call adapt_stamp_of,$(1))
+	@printf 'refine   %-10s %s rays per pixel from %s (%s)\n' $(1) $(RAYS) $(call render_of,$(1)) '$(REFINE_OPTS)'
+	@t0=$$$$(date +%s.%N); $(SIRAYS) refine $(call render_of,$(1)) -o $(call refine_of,$(1)) --estimates $(call estimates_of,$(1)) $(REFINE_OPTS) && \
+	awk -v a=$$$$t0 -v b=$$$$(date +%s.%N) 'BEGIN { printf "refine_s %.3f\n", b - a }' > $(call refine_of,$(1)).seconds
+
+$(call extra_of,$(1)) $(call extra_stats_of,$(1)) &: $(call refine_of,$(1)) $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) $(SIRAYS) | $(if $(PREBUILT),,setup)
+	@set -e; r=$(call refine_of,$(1)); o=$(call extra_of,$(1)); t=$$$$(dirname $$$$o)/.$$$$(basename $$$$o).tmp; \
+	trap 'rm -f $$$$t-*' EXIT; set -- $$$$($(SIRAYS) grid --refinement $$$$r); gw=$$$$1; gh=$$$$2; \
+	rows=$$$$(( gw > 0 && $(MESH_RAYS) / gw > 0 ? $(MESH_RAYS) / gw : 1 )); y=0; bands=; : > $$$$t-all.stats; \
+	printf 'render   %-10s the second pass: %s x %s extra rays, %s band(s)\n' $(1) $$$$gw $$$$gh $$$$(( gh > 0 ? ( gh + rows - 1 ) / rows : 0 )); \
+	while [ $$$$y -lt $$$$gh ]; do \
+	  y1=$$$$(( y + rows < gh ? y + rows : gh )); \
+	  $(SIRAYS) mesh $(SCENEDIR)/$(1).pov -o $$$$t-$$$$y.pov --refinement $$$$r --rows $$$$y:$$$$y1; \
+	  RENDER_STATS=$$$$t-$$$$y.stats RENDER_MESH_CAMERA=1 bash scripts/render.sh $$$$t-$$$$y.pov $$$$t-$$$$y.exr $$$$gw $$$$(( y1 - y $(if $(POVRAY_ROW_BUG),+ 1) )) $(call render_opts_of,$(1)); \
+	  rm -f $$$$t-$$$$y.pov; cat $$$$t-$$$$y.stats >> $$$$t-all.stats; bands="$$$$bands $$$$t-$$$$y.exr"; y=$$$$y1; \
+	done; \
+	$(SIRAYS) assemble $$$$bands -o $$$$t-out.exr --refinement $$$$r $(if $(POVRAY_ROW_BUG),--row-bug); \
+	awk '$$$$1 != "wall_runs" { sum[$$$$1] += $$$$2; if (!($$$$1 in seen)) { seen[$$$$1] = 1; order[++n] = $$$$1 } } \
+	  END { for (i = 1; i <= n; i++) print order[i], sum[order[i]] }' $$$$t-all.stats $$$$r.seconds > $$$$t-sum.stats; \
+	echo "extra_rays $$$$(( gw * gh ))" >> $$$$t-sum.stats; \
+	mv -f $$$$t-sum.stats $(call extra_stats_of,$(1)); mv -f $$$$t-out.exr $$$$o
+
+$(call dir_of,$(1))/rays.png: $(call refine_of,$(1)) $(call extra_stats_of,$(1)) $(call dir_of,$(1))/$(firstword $(METHODS)).png scripts/adaptive_picture.py
+	@$$(PYTHON) scripts/adaptive_picture.py --refinement $(call refine_of,$(1)) --image $(call dir_of,$(1))/$(firstword $(METHODS)).png \
+	  --stats $(call extra_stats_of,$(1)) --out $$@
 endef
 
 # $(call method_rules,SCENE,METHOD): METHOD.exr (float, for the measures), .png (8-bit sRGB) and
@@ -350,7 +428,7 @@ define method_rules
 $(call dir_of,$(1))/.$(2).cmd: FORCE
 	$$(call stamp,$$@,$(call method_cmd_of,$(1),$(2)))
 
-$(call dir_of,$(1))/$(2).exr $(call dir_of,$(1))/$(2).png $(call dir_of,$(1))/$(2).log &: $(call inputs_of,$(1)) $(SIPROJECT) $(call dir_of,$(1))/.$(2).cmd
+$(call dir_of,$(1))/$(2).exr $(call dir_of,$(1))/$(2).png $(call dir_of,$(1))/$(2).log &: $(call inputs_of,$(1)) $(if $(ADAPTIVE),$(call extra_of,$(1))) $(SIPROJECT) $(call dir_of,$(1))/.$(2).cmd
 	@t=$(call dir_of,$(1))/.$(2).tmp; \
 	$(call method_cmd_of,$(1),$(2)) -o $$$$t.exr -d float -v 2>$$$$t.log && \
 	$(call method_cmd_of,$(1),$(2)) -o $$$$t.png -q || \
@@ -404,13 +482,14 @@ endef
 
 ifeq ($(FARM),local)
 $(foreach s,$(ALL_SCENES),$(eval $(call scene_rules,$(s)))$(foreach m,$(METHODS),$(eval $(call method_rules,$(s),$(m)))))
+$(if $(ADAPTIVE),$(foreach s,$(ALL_SCENES),$(eval $(call adaptive_rules,$(s)))))
 else
 $(foreach s,$(ALL_SCENES),$(eval $(call scene_rules,$(s)))$(eval $(call farm_rules,$(s))))
 endif
 
 # The render alone, as a make target: make render SCENE=... SAMPLES=...
 .PHONY: render
-render: $(call render_of,$(SCENE))
+render: $(call render_of,$(SCENE)) $(if $(ADAPTIVE),$(call extra_of,$(SCENE)))
 
 # Without SIPROJECT given, set up and build first (the build brings the
 # default binaries up to date; images depend on them).
@@ -762,3 +841,34 @@ compare-sparse: $(if $(PREBUILT),,build)
 	@PYTHONPATH=$(BUILD)/python $(PYTHON) scripts/compare_sparse.py --work $(SP_WORK) \
 	  --report $(OUT)/report$(if $(QUICK),-quick)/sparse --scenes "$(SP_SCENES)" --res $(SP_RES) \
 	  --ref-factor $(SP_REF_FACTOR) --seed $(SP_SEED)
+
+# make compare-adaptive [QUICK=1]: adaptive rays (docs/studies.md): the
+# estimators against the oracle (per-tile error of min-error cubic) and the
+# L2 error against rays per pixel of uniform sobol rays and adaptive ones,
+# every set a subset of the sobol render of 64 rays per pixel
+# (scripts/compare_adaptive.py); and make SAMPLES=adaptive RAYS=16's own
+# two passes measured. $(OUT)/report(-quick)/adaptive/adaptive.md,
+# adaptive.csv, estimators.csv. QUICK=1: objects and edges at 128^2,
+# reference factor 16.
+ifneq ($(QUICK),)
+AD_SCENES ?= objects edges
+AD_RES ?= 128
+AD_REF_FACTOR ?= 16
+else
+AD_SCENES ?= objects hdr checker edges
+AD_RES ?= 256
+AD_REF_FACTOR ?= 32
+endif
+AD_WORK ?= $(OUT)/compare-adaptive$(if $(QUICK),-quick)
+AD_MAKE = $(MAKE) --no-print-directory SIPROJECT=$(SIPROJECT) SIMETRICS=$(SIMETRICS) SIRAYS=$(SIRAYS) \
+  OUT=$(AD_WORK) RES=$(AD_RES) ZP_NYQUIST=$(ZP_NYQUIST)
+.PHONY: compare-adaptive
+compare-adaptive: $(if $(PREBUILT),,build)
+	@set -e; for s in $(AD_SCENES); do \
+	  $(AD_MAKE) SCENE=$$s FACTOR=$(AD_REF_FACTOR) render; \
+	  for f in 2 4 8; do $(AD_MAKE) -j$(JOBS) SCENE=$$s FACTOR=$$f SAMPLES=sobol SEED=0 render; done; \
+	  $(AD_MAKE) SCENE=$$s SAMPLES=adaptive RAYS=16 SEED=0 METHODS=me-cubic scene >/dev/null; \
+	done
+	@PYTHONPATH=$(BUILD)/python $(PYTHON) scripts/compare_adaptive.py --work $(AD_WORK) \
+	  --report $(OUT)/report$(if $(QUICK),-quick)/adaptive --scenes "$(AD_SCENES)" --res $(AD_RES) \
+	  --ref-factor $(AD_REF_FACTOR) --seed 0 --sirays $(SIRAYS) --siproject $(SIPROJECT)

@@ -7,7 +7,9 @@ and two crops of 64 x 64 pixels enlarged 4x by pixel replication
 pixels, never smoothed) and opened full size on a click: the windows where
 the methods disagree most (the standard deviation across them of each
 pixel's luminance, summed over the window; the second at least two windows
-from the first). OPTIONS, siproject's options of the method (make passes
+from the first). An adaptive render's DIR/rays.png (where its rays went,
+scripts/adaptive_picture.py) is shown after them with DIR/rays.txt under
+it. OPTIONS, siproject's options of the method (make passes
 them), spell the method out where the reader meets its short name. Below,
 DIR/summary.txt, the time and high-pass share of each method. The page
 marks on its body how many of its images loaded (data-loaded="N of M") and
@@ -118,6 +120,13 @@ def main():
         cards.append(f'<figure><figcaption><b>{e}</b>{words}</figcaption>'
                      f'<a href="{e}.png"><img class="full" src="{e}.png" alt="{e}"></a>'
                      f'<div class="crops">{crops}</div></figure>')
+    # an adaptive render's picture of where its rays went (make SAMPLES=adaptive)
+    if os.path.isfile(os.path.join(folder, "rays.png")):
+        caption_path = os.path.join(folder, "rays.txt")
+        caption = open(caption_path).read().strip() if os.path.isfile(caption_path) else "Where the rays went."
+        cards.append(f'<figure><figcaption><b>rays</b><p class="words">{html.escape(caption)}</p></figcaption>'
+                     f'<a href="rays.png"><img class="full" src="rays.png" alt="where the rays went"></a>'
+                     f'</figure>')
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(scene)}: every method</title>
 <style>body{{font-family:sans-serif;margin:1em}}.grid{{display:flex;flex-wrap:wrap;gap:16px}}
 figure{{margin:0}}img.full{{width:256px;height:auto;image-rendering:auto}}

@@ -450,7 +450,9 @@ int run(const Options& o) {
   output_file.commit();
   const double t_write = seconds_since(t);
   if (o.verbose) {
-    const std::string from = f.scattered ? std::to_string(win * hin) + " scattered samples x " + std::to_string(C)
+    // scattered: the samples projected (a refined render's both passes)
+    const long samples = f.scattered ? f.inputs.width * f.inputs.height : win * hin;
+    const std::string from = f.scattered ? std::to_string(samples) + " scattered samples x " + std::to_string(C)
                                          : std::to_string(win) + " x " + std::to_string(hin) + " x " + std::to_string(C);
     std::fprintf(stderr,
                  "siproject: %s -> %ld x %ld, %s %s, display %s, boundary %s, %d threads\n"
@@ -467,7 +469,7 @@ int run(const Options& o) {
     std::fputs(visit_space(k, [&](auto space) { return space.describe(k); }).c_str(), stderr);
     if (f.scattered) {
       const ScatteredReport& sr = *f.scattered;
-      std::fprintf(stderr, "siproject: %ld scattered samples, rule %s: %ld passes", win * hin,
+      std::fprintf(stderr, "siproject: %ld scattered samples, rule %s: %ld passes", samples,
                    scattered_rule_name(r.scattered.rule), sr.passes);
       if (r.scattered.rule == ScatteredRule::LeastSquares) {
         std::fprintf(stderr, ", %d iterations, residual", sr.iterations);
@@ -971,6 +973,10 @@ int main(int argc, char** argv) try {
                                     "--rule variational: the functional's order, 1 (|grad f|^2) or "
                                     "2 (thin plate, f_xx^2 + 2 f_xy^2 + f_yy^2)")
                          ->capture_default_str();
+  app.add_option("--refined", o.settings.refined,
+                 "the second pass of an adaptive render: the extra rays' render (sirays assemble "
+                 "--refinement; the refinement in its sis:refinement attribute), projected with IN, "
+                 "the sobol render it refines, as one set of samples each weighing its area");
   auto* iterations = app.add_option("--iterations", o.settings.iterations,
                                     "--rule fit: at most this many conjugate-gradient iterations")
                          ->capture_default_str();

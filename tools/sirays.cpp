@@ -23,6 +23,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -36,6 +38,8 @@
 #include "sis/imageio.h"
 #include "sis/parallel.h"
 #include "sis/pattern.h"
+#include "sis/refinement.h"
+#include "sis/scattered_input.h"
 #include "sis/staged_file.h"
 
 namespace fs = std::filesystem;
@@ -465,9 +469,9 @@ struct PatternOptions {
 void add_pattern_options(CLI::App* app, PatternOptions& o) {
   app->add_option("--pattern", o.pattern, "sample pattern: regular, jitter, sobol")->capture_default_str();
   app->add_option("--seed", o.seed, "the pattern's seed")->capture_default_str();
-  app->add_option("--size", o.size, "the frame WxH, output pixels")->required();
-  app->add_option("--factor", o.factor, "samples per output pixel along each axis (any positive number)")
-      ->required();
+  app->add_option("--size", o.size, "the frame WxH, output pixels (required without --refinement)");
+  app->add_option("--factor", o.factor, "samples per output pixel along each axis (any positive number; "
+                                        "required without --refinement)");
 }
 
 SamplePattern pattern_of(const PatternOptions& o) {
@@ -493,17 +497,63 @@ std::string pov_string(const std::string& path) {
 // The band's scene: the scene, the rays' mesh2 declared (a mesh_camera
 // takes a mesh { }, which keeps a declared mesh2's triangle order), then the
 // mesh camera (the last camera statement is the one POV-Ray uses).
-void write_mesh(const std::string& scene, const std::string& output, const SamplePattern& pat,
+// The rays of a mesh: a grid gw x gh (the render's pixels), ray k at
+// positions(k0, k1, xy) (frame coordinates of the frame W x H), `what`
+// describes them for the scene's first line.
+struct RayGrid {
+  long gw = 0, gh = 0;
+  long camera_w = 0, camera_h = 0;  // image_width, image_height of the camera's frame (the pattern's grid)
+  double W = 0, H = 0;
+  std::string what;
+  std::function<void(long, long, double*)> positions;
+};
+
+RayGrid pattern_rays(const SamplePattern& pat) {
+  RayGrid g;
+  g.gw = g.camera_w = pat.grid_width();
+  g.gh = g.camera_h = pat.grid_height();
+  g.W = double(pat.width);
+  g.H = double(pat.height);
+  g.what = std::string("pattern ") + pattern_name(pat.kind) + ", seed " + std::to_string(pat.seed) +
+           ", frame " + std::to_string(pat.width) + "x" + std::to_string(pat.height) + ", factor " +
+           metadata_number(pat.factor);
+  g.positions = [pat](long k0, long k1, double* xy) { sample_positions(pat, k0, k1, xy); };
+  return g;
+}
+
+// A refinement's extra rays (sis/refinement.h) in rows as wide as its base's
+// grid; the last row's pixels past the last ray repeat it (assemble drops them).
+RayGrid refinement_rays(const Refinement& r) {
+  RayGrid g;
+  const long m = r.extra_count();
+  if (m < 1) throw UsageError("the refinement refines no tile: there are no extra rays to trace");
+  g.gw = std::min(m, r.base.grid_width());
+  g.gh = (m + g.gw - 1) / g.gw;
+  // the camera's aspect is the frame's: image_width and image_height as the base render's
+  g.camera_w = r.base.grid_width();
+  g.camera_h = r.base.grid_height();
+  g.W = double(r.base.width);
+  g.H = double(r.base.height);
+  g.what = "the " + std::to_string(m) + " extra rays of a refinement of " + std::to_string(r.tiles.size()) +
+           " tiles of " + std::to_string(r.tile) + " pixels to " + std::to_string(r.rays) +
+           " rays per pixel, base pattern " + pattern_name(r.base.kind) + " seed " + std::to_string(r.base.seed);
+  g.positions = [r, m](long k0, long k1, double* xy) {
+    const long e1 = std::min(k1, m);
+    if (e1 > k0) extra_positions(r, k0, e1, xy);
+    for (long k = std::max(k0, e1); k < k1; ++k) extra_positions(r, m - 1, m, xy + 2 * (k - k0));
+  };
+  return g;
+}
+
+void write_mesh(const std::string& scene, const std::string& output, const RayGrid& rg,
                 long y0, long y1, int threads) {
-  const long gw = pat.grid_width();
-  const Camera cam = parse_camera(scene, gw, pat.grid_height());
+  const long gw = rg.gw;
+  const Camera cam = parse_camera(scene, rg.camera_w, rg.camera_h);
   const long n = (y1 - y0) * gw;
   StagedFile staged(output);
   std::string head;
   head += "// sirays mesh: the rays of samples " + std::to_string(y0 * gw) + " to " +
-          std::to_string(y1 * gw - 1) + " of pattern " + pattern_name(pat.kind) + ", seed " +
-          std::to_string(pat.seed) + ", frame " + std::to_string(pat.width) + "x" +
-          std::to_string(pat.height) + ", factor " + metadata_number(pat.factor) + "\n";
+          std::to_string(y1 * gw - 1) + " of " + rg.what + "\n";
   head += "// render " + std::to_string(gw) + " x " + std::to_string(y1 - y0) +
           " (one row more under POV-Ray 3.7.0's FS#254) with -A\n";
   head += "#version 3.7;\n#include " + pov_string(fs::absolute(scene).lexically_normal().string()) + "\n";
@@ -511,7 +561,7 @@ void write_mesh(const std::string& scene, const std::string& output, const Sampl
   write_all(staged.fd(), head, output);
   constexpr long kChunk = 1 << 16;
   const long chunks = (n + kChunk - 1) / kChunk;
-  const double W = double(pat.width), H = double(pat.height);
+  const double W = rg.W, H = rg.H;
   // at most 16 chunks (1 M rays, about 100 MB of text) in memory at once,
   // whatever the band's size
   for (long c0 = 0; c0 < chunks; c0 += 16) {
@@ -521,7 +571,7 @@ void write_mesh(const std::string& scene, const std::string& output, const Sampl
       std::vector<double> xy(2 * kChunk);
       for (long c = a; c < b; ++c) {
         const long f0 = (c0 + c) * kChunk, f1 = std::min(n, f0 + kChunk);
-        sample_positions(pat, y0 * gw + f0, y0 * gw + f1, xy.data());
+        rg.positions(y0 * gw + f0, y0 * gw + f1, xy.data());
         std::string& s = text[std::size_t(c)];
         s.reserve(std::size_t(f1 - f0) * 136);  // a ray is at most about 130 characters
         for (long f = f0; f < f1; ++f) {
@@ -556,9 +606,8 @@ void write_mesh(const std::string& scene, const std::string& output, const Sampl
 
 // ---- assembly ---------------------------------------------------------------
 
-void assemble(const std::vector<std::string>& bands, const std::string& output, const SamplePattern& pat,
-              bool row_bug) {
-  const long gw = pat.grid_width(), gh = pat.grid_height();
+void assemble(const std::vector<std::string>& bands, const std::string& output, long gw, long gh,
+              const Metadata& md, bool row_bug) {
   const int skip = row_bug ? 1 : 0;
   std::vector<std::string> names;
   Image image;
@@ -589,9 +638,83 @@ void assemble(const std::vector<std::string>& bands, const std::string& output, 
   if (y != gh)
     throw InputError("the bands hold " + std::to_string(y) + " rows of rays; the pattern's grid has " +
                      std::to_string(gh) + " (a band POV-Ray did not render whole, or one missing)");
-  Metadata md;
-  for (const PatternAttribute& a : pattern_metadata(pat)) md.emplace_back(a.name, a.value);
   write_image(output, image, names, md, -1, WriteOptions(SampleFormat::Half));
+}
+
+// ---- refinement ------------------------------------------------------------
+
+std::string read_text(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw InputError(path + ": cannot read the refinement (" + std::strerror(errno) + ")");
+  std::stringstream b;
+  b << f.rdbuf();
+  return b.str();
+}
+
+Refinement read_refinement(const std::string& path) {
+  try {
+    return parse_refinement(read_text(path), path);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(e.what());
+  }
+}
+
+struct RefineOptions {
+  std::string base, output, estimates, estimator = "residual";
+  double rays = 0;
+  long refine_rays = 0, tile = 8;
+  double share = 0;
+  bool refine_rays_given = false, share_given = false;
+  int threads = 0;
+};
+
+// The first pass's samples projected (min-error cubic, the fit, mirror),
+// every tile's estimate, the tiles the budget buys: the refinement's text
+// to -o, and with --estimates an EXR of the tile grid (channels estimate and
+// refined, the refinement in its metadata); both written before either
+// replaces a file.
+void refine(const RefineOptions& o, int threads) {
+  Estimator est;
+  try {
+    est = parse_estimator(o.estimator);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--estimator: ") + e.what());
+  }
+  if (o.tile < 1) throw UsageError("--tile " + std::to_string(o.tile) + ": expected a whole number >= 1");
+  if (!(o.rays > 0) || !std::isfinite(o.rays))
+    throw UsageError("--rays " + metadata_number(o.rays) + ": expected a number of rays per pixel > 0");
+  RefinedPlan plan;
+  try {
+    plan = refine_render(o.base, o.rays,
+                         o.refine_rays_given ? std::optional<long>(o.refine_rays) : std::nullopt,
+                         o.share_given ? std::optional<double>(o.share) : std::nullopt, o.tile, est, threads);
+  } catch (const std::invalid_argument& x) {
+    throw UsageError("--rays " + metadata_number(o.rays) +
+                     (o.refine_rays_given ? " --refine-rays " + std::to_string(o.refine_rays) : std::string()) +
+                     (o.share_given ? " --share " + metadata_number(o.share) : std::string()) + ": " + x.what());
+  }
+  const Refinement& r = plan.refinement;
+  const std::vector<double>& e = plan.estimate;
+  const std::string text = refinement_text(r);
+  StagedFile staged(o.output);
+  write_all(staged.fd(), text, o.output);
+  std::optional<StagedFile> map;
+  if (!o.estimates.empty()) {
+    const TileGrid g = r.grid();
+    Image im(g.columns(), g.rows(), 2, kUnset);
+    for (long q = 0; q < g.count(); ++q) {
+      im.data[std::size_t(2 * q)] = float(e[std::size_t(q)]);
+      im.data[std::size_t(2 * q + 1)] = std::binary_search(r.tiles.begin(), r.tiles.end(), q) ? 1.0f : 0.0f;
+    }
+    Metadata md{{kRefinementKey, text}, {"sis:estimator", estimator_name(est)}};
+    map.emplace(stage_image(o.estimates, im, {"estimate", "refined"}, md, -1, WriteOptions(SampleFormat::Float)));
+  }
+  staged.commit();
+  if (map) map->commit();
+  std::fprintf(stderr, "sirays refine: %zu of %ld tiles of %ld pixels refined to %ld rays per pixel (estimator %s): "
+               "%ld extra rays, %.4g rays per pixel in all\n",
+               r.tiles.size(), r.grid().count(), r.tile, r.rays, estimator_name(est), r.extra_count(),
+               r.rays_per_pixel());
 }
 
 }  // namespace
@@ -609,20 +732,77 @@ int main(int argc, char** argv) {
   mesh->add_option("-o,--output", output, "the band's scene (.pov)")->required();
   mesh->add_option("--rows", rows, "the grid's rows Y0:Y1 of the band (default: all)");
   mesh->add_option("--threads", threads, "threads (0: every core)")->capture_default_str();
+  std::string refinement;
+  mesh->add_option("--refinement", refinement,
+                   "trace a refinement's extra rays (sirays refine -o) instead of a pattern's; "
+                   "the grid's rows as wide as the base's, the last padded");
   add_pattern_options(mesh, po);
   std::vector<std::string> bands;
   bool row_bug = false;
   CLI::App* asmb = app.add_subcommand("assemble", "the bands' renders as one input with the pattern's metadata");
-  asmb->add_option("bands", bands, "the bands' renders (EXR), in row order")->required();
+  asmb->add_option("bands", bands, "the bands' renders (EXR), in row order (none for a refinement of no tile)");
   asmb->add_option("-o,--output", output, "the assembled render (.exr)")->required();
   asmb->add_flag("--row-bug", row_bug,
                  "each band was rendered one row higher for POV-Ray 3.7.0's FS#254: drop its first row");
+  asmb->add_option("--refinement", refinement,
+                   "the bands are a refinement's extra rays: write them with the refinement in "
+                   "sis:refinement (siproject BASE --refined)");
   add_pattern_options(asmb, po);
+  CLI::App* grid = app.add_subcommand("grid", "print the width and height of a refinement's ray grid "
+                                              "(the second pass's render; 0 0 for no extra ray)");
+  grid->add_option("--refinement", refinement, "the refinement (sirays refine -o)")->required();
+  RefineOptions ro;
+  CLI::App* ref = app.add_subcommand(
+      "refine", "estimate where a sobol render's projection errs, per tile, and choose the tiles "
+                "a budget of rays refines (the second pass of an adaptive render)");
+  ref->add_option("base", ro.base, "the first pass: a sobol render (sirays assemble)")->required();
+  ref->add_option("-o,--output", ro.output, "the refinement (text; sirays mesh/assemble --refinement)")->required();
+  ref->add_option("--rays", ro.rays, "rays per output pixel over the whole frame, both passes")->required();
+  auto* rr = ref->add_option("--refine-rays", ro.refine_rays,
+                             "rays per pixel in a refined tile [default: the count up to max(64, --rays) whose tiles leave the least estimated error, a tile's error taken to fall as 1 / its rays]");
+  auto* sh = ref->add_option("--share", ro.share,
+                             "the fraction of the frame's pixels refined, (0, 1] (sets --refine-rays)");
+  ref->add_option("--tile", ro.tile, "tile side in output pixels")->capture_default_str();
+  ref->add_option("--estimator", ro.estimator, "residual, halves, contrast or highpass (docs/design.md section 17)")->capture_default_str();
+  ref->add_option("--estimates", ro.estimates,
+                  "also write every tile's estimate and whether it is refined (EXR, one pixel a tile)");
+  ref->add_option("--threads", threads, "threads (0: every core)")->capture_default_str();
   if (auto rc = sis::cli::parse(app, argc, argv)) return *rc;
   try {
-    const SamplePattern pat = pattern_of(po);
+    const int nthreads = threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency()));
+    if (ref->parsed()) {
+      ro.refine_rays_given = rr->count() > 0;
+      ro.share_given = sh->count() > 0;
+      refine(ro, nthreads);
+      return 0;
+    }
+    std::optional<Refinement> rf;
+    if (!refinement.empty()) {
+      if (!po.size.empty() || po.factor != 0)
+        throw UsageError("--refinement " + refinement + ": the rays are the refinement's; drop --size and --factor");
+      rf = read_refinement(refinement);
+    } else if (po.size.empty() || po.factor == 0) {
+      throw UsageError("--size and --factor: the pattern's frame and factor are required (or --refinement)");
+    }
+    if (grid->parsed()) {
+      const long m = rf->extra_count();
+      const long gw = std::min(m, rf->base.grid_width());
+      std::cout << gw << " " << (m ? (m + gw - 1) / gw : 0) << "\n";
+      return 0;
+    }
+    if (asmb->parsed() && rf && rf->extra_count() == 0) {
+      // no tile refined: a file of no ray (one pixel, which no ray reads)
+      if (!bands.empty()) throw UsageError("--refinement " + refinement + " refines no tile: it takes no band");
+      Image none(1, 1, 1, kUnset);
+      none.data[0] = 0;
+      write_image(output, none, {"none"}, {{kRefinementKey, refinement_text(*rf)}}, -1,
+                  WriteOptions(SampleFormat::Half));
+      return 0;
+    }
+    if (asmb->parsed() && bands.empty()) throw UsageError("assemble: no band given");
+    const RayGrid rg = rf ? refinement_rays(*rf) : pattern_rays(pattern_of(po));
     if (mesh->parsed()) {
-      long y0 = 0, y1 = pat.grid_height();
+      long y0 = 0, y1 = rg.gh;
       if (!rows.empty()) {
         const auto colon = rows.find(':');
         char* e = nullptr;
@@ -633,14 +813,20 @@ int main(int argc, char** argv) {
           y1 = std::strtol(rows.c_str() + colon + 1, &e, 10);
           ok = ok && *e == 0 && colon + 1 < rows.size();
         }
-        if (!ok || y0 < 0 || y1 <= y0 || y1 > pat.grid_height())
+        if (!ok || y0 < 0 || y1 <= y0 || y1 > rg.gh)
           throw UsageError("--rows " + rows + ": expected Y0:Y1 with 0 <= Y0 < Y1 <= " +
-                           std::to_string(pat.grid_height()) + " (the grid's rows)");
+                           std::to_string(rg.gh) + " (the grid's rows)");
       }
       if (fs::path(output).extension() != ".pov") throw UsageError("-o " + output + ": a band's scene ends in .pov");
-      write_mesh(scene, output, pat, y0, y1, threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency())));
+      write_mesh(scene, output, rg, y0, y1, nthreads);
     } else {
-      assemble(bands, output, pat, row_bug);
+      Metadata md;
+      if (rf) {
+        md.emplace_back(kRefinementKey, refinement_text(*rf));
+      } else {
+        for (const PatternAttribute& a : pattern_metadata(pattern_of(po))) md.emplace_back(a.name, a.value);
+      }
+      assemble(bands, output, rg.gw, rg.gh, md, row_bug);
     }
   } catch (const UsageError& e) {
     std::cerr << "sirays: " << e.what() << "\n";

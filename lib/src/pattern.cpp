@@ -142,13 +142,17 @@ Vec2 sample_position(const SamplePattern& p, long k) {
       const std::uint64_t N = std::uint64_t(gw) * std::uint64_t(gh);
       const std::uint64_t q = std::uint64_t((u128(k + 1) * P - 1) / N);
       const std::uint64_t i = std::uint64_t(k) - std::uint64_t(u128(q) * N / P);
-      const std::uint64_t pixel = mix_bits(p.seed ^ mix_bits(q ^ 0x5851f42d4c957f2dULL));
-      const double u = unit(owen_scramble(sobol0(std::uint32_t(i)), std::uint32_t(stream_key(pixel, 0))));
-      const double v = unit(owen_scramble(sobol1(std::uint32_t(i)), std::uint32_t(stream_key(pixel, 1))));
-      return {double(q % std::uint64_t(p.width)) + u, double(q / std::uint64_t(p.width)) + v};
+      return sobol_pixel_point(p.seed, p.width, long(q), long(i));
     }
   }
   return {};
+}
+
+Vec2 sobol_pixel_point(std::uint64_t seed, long width, long q, long j) {
+  const std::uint64_t pixel = mix_bits(seed ^ mix_bits(std::uint64_t(q) ^ 0x5851f42d4c957f2dULL));
+  const double u = unit(owen_scramble(sobol0(std::uint32_t(j)), std::uint32_t(stream_key(pixel, 0))));
+  const double v = unit(owen_scramble(sobol1(std::uint32_t(j)), std::uint32_t(stream_key(pixel, 1))));
+  return {double(std::uint64_t(q) % std::uint64_t(width)) + u, double(std::uint64_t(q) / std::uint64_t(width)) + v};
 }
 
 void sample_positions(const SamplePattern& p, long k0, long k1, double* xy, int threads) {

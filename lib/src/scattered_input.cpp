@@ -5,6 +5,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <thread>
@@ -167,6 +168,93 @@ ScatteredInput read_scattered(const std::string& path, const std::optional<Trans
     }
   }
   return in;
+}
+
+void add_refinement(ScatteredInput& base, const std::string& path, const std::optional<Transfer>& transfer) {
+  ImageReader r(path);
+  const std::string text = r.attribute(kRefinementKey);
+  if (text.empty())
+    throw InputError(path + ": no " + kRefinementKey +
+                     " attribute: not the second pass of an adaptive render (sirays assemble --refinement)");
+  Refinement ref;
+  try {
+    ref = parse_refinement(text, path + ": " + kRefinementKey);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(e.what());
+  }
+  if (!base.pattern)
+    throw InputError(path + ": refines a sobol render, and " + base.label +
+                     " names no sample pattern (a render of make SAMPLES=sobol, sirays assemble)");
+  const SamplePattern& p = *base.pattern;
+  if (p.kind != ref.base.kind || p.seed != ref.base.seed || p.width != ref.base.width ||
+      p.height != ref.base.height || p.factor != ref.base.factor)
+    throw InputError(path + ": refines pattern " + pattern_name(ref.base.kind) + " seed " +
+                     std::to_string(ref.base.seed) + " frame " + std::to_string(ref.base.width) + "x" +
+                     std::to_string(ref.base.height) + " factor " + metadata_number(ref.base.factor) + "; " +
+                     base.label + " is " + pattern_name(p.kind) + " seed " + std::to_string(p.seed) +
+                     " frame " + std::to_string(p.width) + "x" + std::to_string(p.height) + " factor " +
+                     metadata_number(p.factor));
+  const long m = ref.extra_count();
+  if (m == 0) {  // nothing refined: the base's samples as they are
+    base.label += " + " + fs::path(path).filename().string();
+    return;
+  }
+  if (r.channel_names() != base.channel_names)
+    throw InputError(path + ": its channels are not " + base.label + "'s");
+  const long w = r.width(), h = r.height();
+  if (std::uint64_t(w) * std::uint64_t(h) < std::uint64_t(m))
+    throw InputError(path + ": " + std::to_string(w * h) + " pixels for the refinement's " +
+                     std::to_string(m) + " extra rays");
+  const int C = r.channels();
+  std::vector<float> rows(std::size_t(w) * h * C);
+  r.read_rows(0, h, rows.data());
+  rows.resize(std::size_t(m) * C);
+  const Transfer t = transfer ? *transfer : r.transfer();
+  decode_to_linear(t, rows.data(), rows.size(), C, base.alpha);
+  for (std::size_t q = 0; q < rows.size(); ++q)
+    if (!std::isfinite(rows[q])) {
+      const long i = long(q / std::size_t(C));
+      throw InputError(path + ": extra ray " + std::to_string(i) + " (pixel " + std::to_string(i % w) + ", " +
+                       std::to_string(i / w) + ") holds a non-finite value");
+    }
+  const std::vector<double> v(rows.begin(), rows.end());
+  try {
+    base.samples = adaptive_samples(std::move(base.samples), ref, v);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path + ": " + e.what());
+  }
+  base.label += " + " + fs::path(path).filename().string();
+}
+
+RefinedPlan refine_render(const std::string& path, double budget, std::optional<long> rays,
+                          std::optional<double> share, long tile, Estimator estimator, int threads) {
+  if (tile < 1) throw std::invalid_argument("a tile of " + std::to_string(tile) + " pixels: expected >= 1");
+  ScatteredInput in = read_scattered(path, std::nullopt);
+  if (!in.pattern || in.pattern->kind != PatternKind::Sobol)
+    throw InputError(path + ": " +
+                     (in.pattern ? std::string("a ") + pattern_name(in.pattern->kind) + " render"
+                                 : std::string("names no sample pattern")) +
+                     ": refinement adds sobol points to a sobol render's pixels (make SAMPLES=sobol)");
+  const SamplePattern& pat = *in.pattern;
+  try {
+    make_refinement(pat, tile, pat.count() / (pat.width * pat.height) + 1, {});
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path + ": " + e.what());
+  }
+  ScatteredTarget t;
+  t.width = double(pat.width);
+  t.height = double(pat.height);
+  ScatteredOptions so;
+  so.threads = threads;
+  RefinedPlan plan;
+  try {
+    const Coefficients k = project_scattered(in.samples, t, so);
+    plan.estimate = estimate_tile_error(in.samples, k, t, so, estimator, tile);
+  } catch (const std::invalid_argument& x) {
+    throw InputError(path + ": " + x.what());
+  }
+  plan.refinement = plan_refinement(pat, plan.estimate, tile, budget, rays, share);
+  return plan;
 }
 
 }  // namespace sis

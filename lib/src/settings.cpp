@@ -238,6 +238,9 @@ ProjectionRequest projection_request(const Settings& o, const Resolved& r, const
 
 // --rule and --iterations: scattered samples only.
 void refuse_scattered_options(const Settings& o, const std::string& label) {
+  if (!o.refined.empty())
+    throw RequestError("--refined " + o.refined + ": the second pass refines a sobol render's "
+                       "samples; " + label + " is a grid of samples");
   if (o.rule_given || o.iterations_given || o.lambda_given || o.smoothness_given)
     throw RequestError(std::string(o.rule_given ? "--rule" : o.iterations_given ? "--iterations" : o.lambda_given ? "--lambda" : "--smoothness") +
                        " applies to scattered samples (a file with position channels " +
@@ -304,7 +307,9 @@ void load_level(const Settings& o, const Resolved& r, const InputSet& set, int l
 Formed form(const Settings& o, const Resolved& r, InputSet set, const FormRequest& fr) {
   if (set.scattered_file) {
     const ImageReader& reader = *set.readers.front();
-    return form_scattered(o, r, read_scattered(reader.path(), r.input_transfer, reader.signature()), fr);
+    ScatteredInput in = read_scattered(reader.path(), r.input_transfer, reader.signature());
+    if (!o.refined.empty()) add_refinement(in, o.refined, r.input_transfer);
+    return form_scattered(o, r, std::move(in), fr);
   }
   refuse_scattered_options(o, set.label);
   Formed f;

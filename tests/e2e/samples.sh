@@ -127,6 +127,6 @@ fi
 rc=0
 make -C "$src" --no-print-directory SIPROJECT="$siproject" SIRAYS="$sirays" OUT="$tmp/out" RES=16 \
   SAMPLES=halton scene >"$tmp/log" 2>&1 || rc=$?
-[ "$rc" -ne 0 ] && grep -q "SAMPLES=halton: expected regular, jitter or sobol" "$tmp/log" &&
+[ "$rc" -ne 0 ] && grep -q "SAMPLES=halton: expected regular, jitter, sobol or adaptive" "$tmp/log" &&
   ok "make SAMPLES=halton refused" || { cat "$tmp/log" >&2; fail "make SAMPLES=halton: expected an error"; }
 exit $failures

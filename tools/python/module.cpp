@@ -322,7 +322,7 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
                     const std::string& input_transfer, std::optional<py::array> positions,
                     std::optional<py::array> weights, std::optional<std::string> rule,
                     std::optional<int> iterations, std::optional<std::string> lambda,
-                    std::optional<int> smoothness, bool pyramid) {
+                    std::optional<int> smoothness, bool pyramid, const std::string& refined) {
   Settings s = settings_of(size, factor, factor_spelling, generator, method, display, boundary,
                            lattice, density, density_spelling, nonfinite, prefilter, clamp,
                            highlight_compress, threads, input_transfer);
@@ -330,6 +330,7 @@ py::tuple form_with(py::object input, const std::string& size, std::optional<dou
   if (iterations) s.iterations = *iterations, s.iterations_given = true;
   if (lambda) s.lambda = *lambda, s.lambda_given = true;
   if (smoothness) s.smoothness = *smoothness, s.smoothness_given = true;
+  s.refined = refined;
   std::optional<ScatteredArrays> scattered;
   if (positions) {
     scattered = ScatteredArrays{py::reinterpret_borrow<py::array>(input),
@@ -680,7 +681,44 @@ PYBIND11_MODULE(_core, m) {
         py::arg("highlight_compress"), py::arg("threads"), py::arg("coefficients_only"),
         py::arg("input_transfer"), py::arg("positions"), py::arg("weights"), py::arg("rule"),
         py::arg("iterations"), py::arg("lambda_"), py::arg("smoothness"),
-        py::arg("pyramid") = false);
+        py::arg("pyramid") = false, py::arg("refined") = "");
+  // refine(): an adaptive render's first pass refined (refine_render);
+  // errors of the plan name the keywords.
+  m.def("_refine", [](const std::string& path, double rays, std::optional<long> refine_rays,
+                      std::optional<double> share, long tile, const std::string& estimator, int threads) {
+    RefinedPlan plan = translated(false, [&] {
+      Estimator e;
+      try {
+        e = parse_estimator(estimator);
+      } catch (const std::invalid_argument& x) {
+        throw RequestError(std::string("estimator=: ") + x.what());
+      }
+      if (tile < 1) throw RequestError("tile=" + std::to_string(tile) + ": expected a whole number >= 1");
+      py::gil_scoped_release release;
+      try {
+        return refine_render(path, rays, refine_rays, share, tile, e,
+                             threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency())));
+      } catch (const std::invalid_argument& x) {
+        throw RequestError("refine(rays=" + metadata_number(rays) +
+                           (refine_rays ? ", refine_rays=" + std::to_string(*refine_rays) : std::string()) +
+                           (share ? ", share=" + metadata_number(*share) : std::string()) + "): " + x.what());
+      }
+    });
+    const Refinement& r = plan.refinement;
+    const TileGrid g = r.grid();
+    py::array_t<double> est({py::ssize_t(g.rows()), py::ssize_t(g.columns())});
+    std::memcpy(est.mutable_data(), plan.estimate.data(), plan.estimate.size() * sizeof(double));
+    py::dict d;
+    d["text"] = refinement_text(r);
+    d["tiles"] = r.tiles;
+    d["tile"] = r.tile;
+    d["rays"] = r.rays;
+    d["base_rays"] = r.base_rays();
+    d["extra_rays"] = r.extra_count();
+    d["rays_per_pixel"] = r.rays_per_pixel();
+    d["estimates"] = est;
+    return d;
+  });
   m.def("_partial",
         [](py::object input, const std::string& out, std::optional<std::pair<long, long>> bands,
            std::optional<std::pair<long, long>> rows, std::optional<long> grid_rows,

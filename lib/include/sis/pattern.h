@@ -61,6 +61,13 @@ Vec2 sample_position(const SamplePattern& pattern, long k);
 // the same values as sample_position, on `threads` threads.
 void sample_positions(const SamplePattern& pattern, long k0, long k1, double* xy, int threads = 1);
 
+// Point j (0 <= j < 2^32) of output pixel q's (row-major in a frame `width`
+// pixels wide) own Owen-scrambled Sobol' sequence under `seed`: the sobol
+// pattern's sample c(q) + j at any density, so a pixel's first n points are
+// the same at every density that gives it at least n (sis/refinement.h adds
+// points n, n + 1, ... to a pixel of a sobol render).
+Vec2 sobol_pixel_point(std::uint64_t seed, long width, long q, long j);
+
 // The render's metadata that names its pattern (string attributes of the
 // file; sis/scattered_input.h reads a render that has them).
 inline constexpr const char* kPatternKey = "sis:pattern";

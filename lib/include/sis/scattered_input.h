@@ -17,6 +17,7 @@
 
 #include "sis/imageio.h"
 #include "sis/pattern.h"
+#include "sis/refinement.h"
 #include "sis/scattered.h"
 
 namespace sis {
@@ -77,5 +78,29 @@ ScatteredLayout scattered_layout(const ImageReader& reader);
 // that is no longer that file is an InputError.
 ScatteredInput read_scattered(const std::string& path, const std::optional<Transfer>& transfer,
                               const FileSignature& expected = {});
+
+// The second pass of an adaptive render (sis/refinement.h): `path`, the
+// extra rays' render (sirays assemble --refinement), whose sis:refinement
+// attribute holds the refinement's text and whose first extra_count()
+// pixels, row-major, are the extra rays' values, added to `base` (a sobol
+// render read by read_scattered) by adaptive_samples. InputError naming the
+// file: no sis:refinement, a refinement that does not parse, a base pattern
+// other than base's, other channels, fewer pixels than rays.
+inline constexpr const char* kRefinementKey = "sis:refinement";
+void add_refinement(ScatteredInput& base, const std::string& path, const std::optional<Transfer>& transfer);
+
+// The first pass of an adaptive render refined (sirays refine, Python
+// refine()): the sobol render at `path` projected (min-error cubic, the fit,
+// mirror, on `threads` threads), every tile's estimate, and the tiles the
+// budget buys (plan_refinement). InputError naming the file: not a sobol
+// render of a whole number of rays in every pixel, unreadable; the plan's
+// std::invalid_argument (a budget below the base...) as it is, for the
+// caller to name its options.
+struct RefinedPlan {
+  Refinement refinement;
+  std::vector<double> estimate;  // per tile, row-major
+};
+RefinedPlan refine_render(const std::string& path, double budget, std::optional<long> rays,
+                          std::optional<double> share, long tile, Estimator estimator, int threads);
 
 }  // namespace sis

@@ -45,6 +45,9 @@ struct Settings {
   // functional's order (1 or 2).
   std::string lambda = "gcv";
   int smoothness = 2;
+  // The second pass of an adaptive render (sis/refinement.h): its extra
+  // rays' render, projected with the sobol input's samples ("" : none).
+  std::string refined;
   // Which were given (a coefficient file refuses them; a conventional
   // filter named alone means the conventional method).
   bool generator_given = false, method_given = false, boundary_given = false;

@@ -48,6 +48,7 @@ __all__ = [
     "merge",
     "band_cuts",
     "sample_positions",
+    "refine",
     "frame_weights",
     "Coefficients",
     "highpass_share",
@@ -286,7 +287,7 @@ def _grey(input, positions=None) -> bool:
 def _form(input, coefficients_only, *, size, output_shape, factor, generator, method, display,
           boundary, lattice, density, nonfinite, prefilter, clamp, highlight_compress, threads,
           input_transfer, positions=None, weights=None, rule=None, iterations=None,
-          lambda_=None, smoothness=None, pyramid=False):
+          lambda_=None, smoothness=None, pyramid=False, refined=None):
     factor_spelling = "" if factor is None else str(factor)  # as given, for messages
     density_spelling = "" if density is None else str(density)
     factor = _number("factor", factor, optional=True)
@@ -327,7 +328,8 @@ def _form(input, coefficients_only, *, size, output_shape, factor, generator, me
         coefficients_only=coefficients_only,
         input_transfer=_text("input_transfer", input_transfer),
         positions=p, weights=w, rule=rule, iterations=iterations, lambda_=lambda_,
-        smoothness=smoothness, pyramid=pyramid)
+        smoothness=smoothness, pyramid=pyramid,
+        refined="" if refined is None else _path("refined", refined))
     for w in result[2]:
         _warnings.warn(w, RuntimeWarning, stacklevel=3)
     return result
@@ -342,7 +344,7 @@ def project(input: Input, *, size: Optional[Size] = None,
             prefilter: str = "fft", clamp: str = "none", highlight_compress: bool = False,
             threads: int = 0, input_transfer: str = "auto", positions=None, weights=None,
             rule: Optional[str] = None, iterations: Optional[int] = None,
-            lambda_=None, smoothness: Optional[int] = None) -> np.ndarray:
+            lambda_=None, smoothness: Optional[int] = None, refined=None) -> np.ndarray:
     """The final image of a render, as siproject forms it.
 
     input: a file path (any image OpenImageIO reads, streamed in bands as
@@ -388,6 +390,9 @@ def project(input: Input, *, size: Optional[Size] = None,
         smoothness: its functional's order, 1 or 2 (None: 2). A file with
         position channels (pFilm.x, pFilm.y) is projected so without
         positions=.
+    refined: an adaptive render's second pass (a path: the extra rays'
+        render, sirays assemble --refinement), projected with input, the
+        sobol render it refines (siproject's --refined; see refine()).
 
     Returns a float32 array (height, width, channels): the linear result
     siproject writes to a float EXR, bit for bit; (height, width) for an
@@ -400,7 +405,7 @@ def project(input: Input, *, size: Optional[Size] = None,
                         highlight_compress=highlight_compress, threads=threads,
                         input_transfer=input_transfer, positions=positions, weights=weights,
                         rule=rule, iterations=iterations, lambda_=lambda_,
-                        smoothness=smoothness)
+                        smoothness=smoothness, refined=refined)
     return image[:, :, 0] if _grey(input, positions) else image
 
 
@@ -448,7 +453,7 @@ def coefficients(input: Input, *, size: Optional[Size] = None,
                  highlight_compress: bool = False, threads: int = 0,
                  input_transfer: str = "auto", positions=None, weights=None,
                  rule: Optional[str] = None, iterations: Optional[int] = None,
-                 lambda_=None, smoothness: Optional[int] = None) -> "Coefficients":
+                 lambda_=None, smoothness: Optional[int] = None, refined=None) -> "Coefficients":
     """The coefficients of the approximation, with their space.
 
     The keywords are project()'s (there is no display or clamp: those apply
@@ -464,7 +469,7 @@ def coefficients(input: Input, *, size: Optional[Size] = None,
                     prefilter=prefilter, clamp="none", highlight_compress=highlight_compress,
                     threads=threads, input_transfer=input_transfer, positions=positions,
                     weights=weights, rule=rule, iterations=iterations, lambda_=lambda_,
-                    smoothness=smoothness)
+                    smoothness=smoothness, refined=refined)
     return Coefficients(k, grey=_grey(input, positions))
 
 
@@ -577,6 +582,39 @@ def sample_positions(pattern: str = "regular", *, seed: int = 0, size: Size,
     return _core._sample_positions(name, s, w, h, float(np.sqrt(r)), _threads(threads))
 
 
+def refine(input: Union[str, "os.PathLike[str]"], *, rays: float, refine_rays: Optional[int] = None,
+           share: Optional[float] = None, tile: int = 8, estimator: str = "residual",
+           threads: int = 0) -> dict:
+    """Where an adaptive render's second pass puts its rays (sirays refine;
+    docs/design.md section 17).
+
+    input: the first pass, a sobol render of the same whole number of rays
+    in every pixel (make SAMPLES=sobol with a whole FACTOR), projected
+    min-error cubic by the fit; each tile of tile x tile output pixels gets
+    the estimator's estimate of its error ("residual", "halves", "contrast"
+    or "highpass"), and the tiles of the largest estimates are refined while
+    both passes' rays fit rays per output pixel over the frame. refine_rays:
+    a refined pixel's rays, or share: the fraction of the frame's pixels
+    refined (0, 1], or neither: the tool's choice (the count up to max(64,
+    rays) that leaves the least estimate, a tile's error taken to fall as 1 /
+    its rays).
+
+    Returns a dict: text (the refinement, as sirays refine writes it: give it
+    to sirays mesh/assemble --refinement), tiles (the refined tiles' indices,
+    row-major), tile, rays (a refined pixel's), base_rays, extra_rays (the
+    second pass's), rays_per_pixel (both passes' over the frame) and
+    estimates (a float64 array, tile rows x tile columns).
+    """
+    path = _path("input", input)
+    r = _number("rays", rays)
+    if not r > 0 or r != r or r == float("inf"):
+        raise ValueError(f"rays={r}: expected the rays per output pixel over the frame, a number > 0")
+    rr = None if refine_rays is None else _whole("refine_rays", refine_rays)
+    sh = _number("share", share, optional=True)
+    return _core._refine(path, r, rr, sh, _whole("tile", tile), _text("estimator", estimator),
+                         _threads(threads))
+
+
 def frame_weights(times: Sequence[float], *, fps: float, time: float, shutter: str = "180:0",
                   shutter_curve: str = "box", degree: int = 3, step: Optional[float] = None,
                   model: str = "cubic", method: str = "min-error") -> np.ndarray:
@@ -613,6 +651,7 @@ def frame_weights(times: Sequence[float], *, fps: float, time: float, shutter: s
                                            (t[-1] - t[0]) / (len(t) - 1) if s is None and len(t) > 1
                                            else (1.0 / r if s is None else s), _text("model", model),
                                            m == "conventional"), dtype=np.float64)
+
 
 
 def _path(name: str, path) -> str:

@@ -1,0 +1,325 @@
+#!/usr/bin/env python3
+"""Adaptive rays (make compare-adaptive): which estimator finds the tiles
+where min-error cubic errs, and the error against rays per pixel of uniform
+sobol rays and of adaptive ones.
+
+Every sample set here is a subset of one sobol render of 64 rays per pixel
+(make SAMPLES=sobol FACTOR=8): a pixel's first n points of its own
+scrambled sequence are the sobol pattern's at n rays per pixel (sis/pattern.h),
+and a refined tile's rays are the base's and the extra points of the same
+sequence (sis/refinement.h), so uniform renders of 4 to 64 rays per pixel and
+adaptive ones of any tiles are all read from it, ray for ray. The base is
+checked against the factor-2 sobol render, which make SAMPLES=adaptive
+refines. Errors: the continuous L2 error of min-error cubic (the fit) against
+the regular reference render at --ref-factor, border --border pixels.
+
+The oracle: per 8 x 8 tile, the squared error of the base's approximation
+against the reference ("true"), and of the base's against the 64-ray
+uniform approximation ("reducible": what rays can remove). The estimators
+(sirays refine --estimates) are ranked against both by Spearman's rank
+correlation, and each chooses tiles (sirays refine's own plan, refined to
+64 rays per pixel) at budgets of 8 to 32 rays per pixel; so do both
+oracles (the same greedy plan). REPORT/adaptive.md, adaptive.csv,
+estimators.csv.
+
+    compare_adaptive.py --work DIR --report DIR --scenes "objects edges"
+        --res 128 --ref-factor 16 --seed 0 --sirays build/tools/sirays
+"""
+
+import argparse
+import csv
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+from scipy.stats import spearmanr
+
+import siproject
+
+ESTIMATORS = ("halves", "contrast", "residual", "highpass")
+UNIFORM = (4, 8, 12, 16, 24, 32, 64)
+BUDGETS = (6, 8, 12, 16, 24, 32)
+FINE = 64
+BASE = 4
+
+
+def render_path(work, scene, res, factor, pattern, seed):
+    tag = "" if pattern == "regular" else f"-{pattern}-s{seed}"
+    return os.path.join(work, "render", f"{scene}-{res}-f{factor}{tag}.exr")
+
+
+def need(path):
+    if not os.path.isfile(path):
+        sys.exit(f"compare_adaptive.py: {path}: no such render (make compare-adaptive makes it)")
+    return path
+
+
+def read_refinement(path):
+    with open(path) as f:
+        words = f.read().split()
+    i = words.index("tiles")
+    n = int(words[i + 1])
+    return [int(w) for w in words[i + 2:i + 2 + n]], int(words[words.index("rays") + 1])
+
+
+class Scene:
+    def __init__(self, a, scene):
+        self.a, self.name = a, scene
+        W = H = a.res
+        self.W, self.H = W, H
+        self.P = W * H
+        ref = siproject.read_image(need(render_path(a.work, scene, a.res, a.ref_factor, "regular", 0)))
+        self.ref = ref
+        self.truth = siproject.Reference(ref, border=a.border)
+        fine = siproject.read_image(need(render_path(a.work, scene, a.res, "8", "sobol", a.seed)))
+        C = fine.shape[-1]
+        self.C = C
+        self.V = fine.reshape(self.P, FINE, C).astype(np.float64)
+        self.X = siproject.sample_positions("sobol", seed=a.seed, size=(W, H),
+                                            rays_per_pixel=FINE).reshape(self.P, FINE, 2)
+        self.base_path = need(render_path(a.work, scene, a.res, "2", "sobol", a.seed))
+        base = siproject.read_image(self.base_path).reshape(self.P, BASE, C)
+        self.base_check = float(np.max(np.abs(base - self.V[:, :BASE])))
+        T = a.tile
+        self.tcols = (W + T - 1) // T
+        self.trows = (H + T - 1) // T
+        py, px = np.mgrid[0:H, 0:W]
+        self.tile_of_pixel = ((py // T) * self.tcols + px // T).ravel()
+
+    def project(self, counts):
+        j = np.arange(FINE)[None, :]
+        mask = j < counts[:, None]
+        values = self.V[mask]
+        positions = self.X[mask]
+        weights = np.repeat(1.0 / counts, counts)
+        return siproject.coefficients(values, positions=positions, weights=weights,
+                                      size=(self.W, self.H), generator="cubic", method="min-error")
+
+    def counts_for(self, tiles, fine=FINE):
+        c = np.full(self.P, BASE, dtype=np.int64)
+        if len(tiles):
+            c[np.isin(self.tile_of_pixel, np.asarray(tiles))] = fine
+        return c
+
+    def tile_errors(self, k, other=None):
+        """Per tile: squared error of k against the reference (or against
+        `other`, coefficients), the mean over the points within the border
+        times the tile's area."""
+        rf = self.ref.shape[1] // self.W
+        f = k.resample(size=(self.W * rf, self.H * rf), display="centred").astype(np.float64)
+        g = self.ref if other is None else other.resample(size=(self.W * rf, self.H * rf),
+                                                          display="centred")
+        d = ((f - g) ** 2).sum(axis=-1)
+        c = (np.arange(self.W * rf) + 0.5) / rf
+        inside = (c >= self.a.border) & (c <= self.W - self.a.border)
+        d = d * inside[None, :] * inside[:, None]
+        T = self.a.tile * rf
+        e = d.reshape(self.trows, T, self.tcols, T).sum(axis=(1, 3)) / rf**2
+        return e.ravel()
+
+
+def plan(est, budget, P, tile_pixels):
+    order = sorted(range(len(est)), key=lambda t: (-est[t], t))
+    allowed = math.floor(budget * P + 1e-6) - BASE * P
+    used, chosen = 0, []
+    for t in order:
+        add = tile_pixels[t] * (FINE - BASE)
+        if used + add > allowed:
+            break
+        used += add
+        chosen.append(t)
+    return sorted(chosen)
+
+
+def sirays_refine(a, s, budget, estimator, work, fine=FINE):
+    """sirays refine's tiles, refined rays (fine None: the tool's choice),
+    estimates and wall time."""
+    out = os.path.join(work, f"{s.name}-{estimator}-{budget}-{fine}.txt")
+    est = os.path.join(work, f"{s.name}-{estimator}.exr")
+    t = time.perf_counter()
+    subprocess.run([a.sirays, "refine", s.base_path, "-o", out, "--rays", str(budget)] +
+                   ([] if fine is None else ["--refine-rays", str(fine)]) +
+                   ["--estimator", estimator, "--tile", str(a.tile),
+                    "--estimates", est, "--threads", "1"], check=True, stderr=subprocess.DEVNULL)
+    seconds = time.perf_counter() - t
+    e = siproject.read_image(est)[:, :, 0].astype(np.float64).ravel()
+    tiles, rays = read_refinement(out)
+    return tiles, rays, e, seconds
+
+
+def measure(a):
+    rows, est_rows, notes = [], [], []
+    work = tempfile.mkdtemp(prefix="compare-adaptive-")
+    for scene in a.scenes.split():
+        s = Scene(a, scene)
+        notes.append(f"{scene}: the factor-2 sobol render against the 64-ray render's first 4 points "
+                     f"of each pixel: largest difference {s.base_check:g}")
+        uniform = {}
+        for n in UNIFORM:
+            t = time.perf_counter()
+            k = s.project(np.full(s.P, n, dtype=np.int64))
+            uniform[n] = k
+            rows.append(dict(scene=scene, rays=float(n), method="uniform sobol", l2=s.truth.l2_error(k),
+                             tiles=0, seconds=time.perf_counter() - t))
+        true = s.tile_errors(uniform[BASE])
+        reducible = s.tile_errors(uniform[BASE], uniform[FINE])
+        tile_pixels = [int((s.tile_of_pixel == t).sum()) for t in range(len(true))]
+        choices = {"oracle (true error)": (true, None), "oracle (reducible error)": (reducible, None)}
+        for e in ESTIMATORS:
+            _, _, est, secs = sirays_refine(a, s, 16, e, work)
+            rt = spearmanr(est, true)[0]
+            rr = spearmanr(est, reducible)[0]
+            # the share of the true (reducible) error in the tiles it ranks worst 20 %
+            top = np.argsort(-est, kind="stable")[: max(1, len(est) // 5)]
+            est_rows.append(dict(scene=scene, estimator=e, spearman_true=rt, spearman_reducible=rr,
+                                 top20_true_share=true[top].sum() / true.sum(),
+                                 top20_reducible_share=reducible[top].sum() / reducible.sum(),
+                                 seconds=secs))
+            choices[e] = (est, e)
+        for n in (("oracle (true error)", true), ("oracle (reducible error)", reducible)):
+            top = np.argsort(-n[1], kind="stable")[: max(1, len(true) // 5)]
+            est_rows.append(dict(scene=scene, estimator=n[0], spearman_true=spearmanr(n[1], true)[0],
+                                 spearman_reducible=spearmanr(n[1], reducible)[0],
+                                 top20_true_share=true[top].sum() / true.sum(),
+                                 top20_reducible_share=reducible[top].sum() / reducible.sum(),
+                                 seconds=0.0))
+        for budget in BUDGETS:
+            for name, (est, e) in choices.items():
+                for fine in ((FINE,) if e is None else (FINE, None)):
+                    t = time.perf_counter()
+                    if e is None:
+                        tiles, rays = plan(est, budget, s.P, tile_pixels), FINE
+                    else:
+                        tiles, rays, _, _ = sirays_refine(a, s, budget, e, work, fine)
+                    counts = s.counts_for(tiles, rays)
+                    k = s.project(counts)
+                    label = "adaptive " + name + (f", {FINE} rays" if fine else ", the tool's rays")
+                    rows.append(dict(scene=scene, rays=float(counts.sum()) / s.P, method=label,
+                                     l2=s.truth.l2_error(k), tiles=len(tiles), budget=budget,
+                                     refined=rays, seconds=time.perf_counter() - t))
+        print(f"compare_adaptive.py: {scene} done", file=sys.stderr)
+    return rows, est_rows, notes
+
+
+def write(a, rows, est_rows, notes, pipeline):
+    os.makedirs(a.report, exist_ok=True)
+    with open(os.path.join(a.report, "adaptive.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=["scene", "method", "budget", "rays", "tiles", "refined", "l2", "seconds"],
+                           extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
+    with open(os.path.join(a.report, "estimators.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(est_rows[0]))
+        w.writeheader()
+        w.writerows(est_rows)
+    L = [f"# Adaptive rays ({a.res}^2, min-error cubic, reference factor {a.ref_factor}, sobol seed "
+         f"{a.seed}, tiles of {a.tile}, base {BASE} rays per pixel, refined tiles {FINE}, border "
+         f"{a.border})", ""]
+    L += ["Every sample set is a subset of the sobol render of 64 rays per pixel (see the script's "
+          "docstring). " + " ".join(notes), ""]
+    goal = {"edges": 24}
+    for scene in a.scenes.split():
+        sr = [r for r in rows if r["scene"] == scene]
+        u = {r["rays"]: r["l2"] for r in sr if r["method"] == "uniform sobol"}
+        u64 = u[64.0]
+        L += [f"## {scene}", "", "### Estimators against the oracle (per tile, base 4 rays per pixel)", "",
+              "| estimator | Spearman vs true error | vs reducible error | true error in its worst 20 % "
+              "| reducible error in its worst 20 % | seconds (sirays refine) |",
+              "| --- | --- | --- | --- | --- | --- |"]
+        for r in [r for r in est_rows if r["scene"] == scene]:
+            L.append(f"| {r['estimator']} | {r['spearman_true']:.3f} | {r['spearman_reducible']:.3f} | "
+                     f"{r['top20_true_share']:.3f} | {r['top20_reducible_share']:.3f} | {r['seconds']:.2f} |")
+        L += ["", "### L2 error against rays per pixel", "",
+              f"Uniform sobol at 64 rays per pixel: L2 {u64:.6f} (the goal: within 2 %, "
+              f"{1.02 * u64:.6f}).", "",
+              "The excess left: (L2 - L2 of uniform 64) / (L2 of uniform 4 - L2 of uniform 64), the "
+              "share of what rays can remove from the base's error that is left.", "",
+              "| method | budget | rays per pixel | tiles refined | to rays per pixel | L2 | / uniform 64 | excess left |",
+              "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+        for r in sr:
+            L.append(f"| {r['method']} | {r.get('budget', '')} | {r['rays']:.3f} | {r['tiles']} | {r.get('refined', '')} | "
+                     f"{r['l2']:.6f} | {r['l2'] / u64:.4f} | {(r['l2'] - u64) / (u[4.0] - u64):.3f} |")
+        limit = goal.get(scene, 16)
+        for m in sorted({r["method"] for r in sr}):
+            met = [r for r in sr if r["method"] == m and r["rays"] <= limit + 1e-9 and r["l2"] <= 1.02 * u64]
+            best = min((r for r in sr if r["method"] == m and r["rays"] <= limit + 1e-9),
+                       key=lambda r: r["l2"], default=None)
+            if best:
+                L.append(f"- {m}: best at <= {limit} rays per pixel {best['l2']:.6f} "
+                         f"({best['l2'] / u64:.4f} x uniform 64) at {best['rays']:.3f}: goal "
+                         f"{'met' if met else 'not met'}")
+        L.append("")
+    if pipeline:
+        L += ["## make SAMPLES=adaptive (the real second pass)", ""] + pipeline + [""]
+    with open(os.path.join(a.report, "adaptive.md"), "w") as f:
+        f.write("\n".join(L))
+    print("\n".join(L))
+
+
+def stats(path):
+    out = {}
+    if os.path.isfile(path):
+        for line in open(path):
+            w = line.split()
+            if len(w) >= 2:
+                out[w[0]] = float(w[1])
+    return out
+
+
+def pipeline_rows(a):
+    """make SAMPLES=adaptive RAYS=16's own passes (the real second pass
+    traced by POV-Ray), projected by siproject --refined, against the
+    reference; and the POV-Ray wall times beside the uniform render of 16
+    rays per pixel (make SAMPLES=sobol FACTOR=4)."""
+    out = []
+    for scene in a.scenes.split():
+        name = os.path.join(a.work, "render", f"{scene}-{a.res}-adaptive-r16-s{a.seed}")
+        base = render_path(a.work, scene, a.res, "2", "sobol", a.seed)
+        if not os.path.isfile(name + ".exr"):
+            continue
+        with tempfile.TemporaryDirectory() as t:
+            subprocess.run([a.siproject, base, "--refined", name + ".exr", "--size", f"{a.res}x{a.res}",
+                            "--generator", "cubic", "--method", "min-error", "--coeffs",
+                            os.path.join(t, "k.exr"), "-o", os.path.join(t, "o.exr"), "-q"], check=True)
+            k = siproject.load(os.path.join(t, "k.exr"))
+        ref = siproject.read_image(render_path(a.work, scene, a.res, a.ref_factor, "regular", 0))
+        l2 = siproject.Reference(ref, border=a.border).l2_error(k)
+        words = open(name + ".refine.txt").read().split()
+        rays, tiles = int(words[words.index("rays") + 1]), int(words[words.index("tiles") + 1])
+        b = stats(render_path(a.work, scene, a.res, "2", "sobol", a.seed).replace(".exr", ".stats"))
+        x = stats(name + ".stats")
+        u = stats(render_path(a.work, scene, a.res, "4", "sobol", a.seed).replace(".exr", ".stats"))
+        total = (b.get("wall_s", 0) + b.get("mesh_s", 0) + x.get("refine_s", 0) + x.get("wall_s", 0))
+        out.append(f"- {scene}: {tiles} tiles refined to {rays} rays per pixel, L2 {l2:.6f} "
+                   f"(coefficients in float, as the coefficient file keeps them); first pass "
+                   f"{b.get('wall_s', 0):.2f} s of POV-Ray and {b.get('mesh_s', 0):.2f} s of sirays mesh, "
+                   f"sirays refine {x.get('refine_s', 0):.2f} s, second pass {x.get('wall_s', 0):.2f} s "
+                   f"({int(x.get('extra_rays', 0))} rays, one POV-Ray process): {total:.2f} s in all, "
+                   f"against {u.get('wall_s', 0) + u.get('mesh_s', 0):.2f} s for the uniform render of 16 "
+                   f"rays per pixel")
+    return out
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--work", required=True)
+    p.add_argument("--report", required=True)
+    p.add_argument("--scenes", default="objects edges")
+    p.add_argument("--res", type=int, default=128)
+    p.add_argument("--ref-factor", default="16")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--tile", type=int, default=8)
+    p.add_argument("--border", type=float, default=2.0)
+    p.add_argument("--sirays", default="build/tools/sirays")
+    p.add_argument("--siproject", default="build/tools/siproject")
+    a = p.parse_args()
+    rows, est_rows, notes = measure(a)
+    write(a, rows, est_rows, notes, pipeline_rows(a))
+
+
+if __name__ == "__main__":
+    main()
