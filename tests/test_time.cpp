@@ -24,7 +24,8 @@ std::vector<double> centres(double t0, double L, int n, int K) {
 
 double model(const TimeProjection& p, const std::vector<double>& c, double t) {
   double s = 0;
-  for (int i = 0; i < p.count(); ++i) s += c[i] * bspline(p.degree(), t / p.step() - (p.first() + i));
+  for (int i = 0; i < p.count(); ++i)
+    s += c[i] * bspline(p.degree(), (t - p.origin()) / p.step() - (p.first() + i));
   return s;
 }
 
@@ -44,7 +45,7 @@ TEST(Time, DegreeZeroFullShutterIsTheSubFrameAverage) {
   const double fps = 24;
   const int K = 5, n = 6;
   const std::vector<double> t = centres(-0.5 / fps, 1 / fps, n, K);
-  TimeProjection p(t, 0, 1 / fps);
+  TimeProjection p(t, 0, 1 / fps, TimeModel::Hold);
   const Shutter s = box(360, -180);
   for (int f = 0; f < n; ++f) {
     const std::vector<double> u = frame_weights(p, s, f / fps, fps);
@@ -104,7 +105,7 @@ TEST(Time, StaticSceneGivesTheSpatialResult) {
   std::vector<double> t = centres(0, 1 / fps, 8, 4);
   for (size_t k = 0; k < t.size(); ++k) t[k] += (k % 2 ? 0.2 : -0.1) / fps / 4;  // uneven
   for (int D = 0; D <= 3; ++D) {
-    TimeProjection p(t, D, 1 / fps);
+    TimeProjection p(t, D, 1 / fps, TimeModel::Hold);
     const Shutter s = box(180, 0);
     int a, b;
     default_frames(t, s, fps, a, b);
@@ -126,7 +127,7 @@ TEST(Time, PolynomialsReproducedInTheInterior) {
   const double S = 0.1;
   const std::vector<double> t = centres(0, S, 24, 16);
   for (int D = 0; D <= 3; ++D) {
-    TimeProjection p(t, D, S);
+    TimeProjection p(t, D, S, TimeModel::Hold);
     for (int n = 0; n <= D; ++n) {
       std::vector<double> f(t.size());
       for (size_t k = 0; k < t.size(); ++k) f[k] = std::pow(t[k] / 2.4 - 0.5, n) * 2;
@@ -147,7 +148,7 @@ TEST(Time, WeightsDecayAwayFromTheShutter) {
   for (int k = 0; k < 400; ++k) t.push_back((k + 0.5) / 100.0);
   const double fps = 25;
   for (int D = 1; D <= 3; ++D) {
-    TimeProjection p(t, D, 1 / fps);
+    TimeProjection p(t, D, 1 / fps, TimeModel::Hold);
     const Shutter s = box(180, 0);
     const std::vector<double> u = frame_weights(p, s, 2.0, fps);
     const double z = std::abs(bspline_prefilter_poles(D)[0]);
@@ -175,10 +176,10 @@ TEST(Time, BadTimesAndShuttersAreRefused) {
   EXPECT_THROW(parse_shutter("180", "/nonexistent/curve.txt"), std::invalid_argument);
   EXPECT_EQ(parse_shutter("360", "tent").angle, 360);
   EXPECT_EQ(parse_shutter("90:-45", "cubic").phase, -45);
-  EXPECT_THROW(TimeProjection({0, 1}, 4, 1), std::invalid_argument);
-  EXPECT_THROW(TimeProjection({0, 1}, 1, 0), std::invalid_argument);
+  EXPECT_THROW(TimeProjection({0, 1}, 4, 1, TimeModel::Hold), std::invalid_argument);
+  EXPECT_THROW(TimeProjection({0, 1}, 1, 0, TimeModel::Hold), std::invalid_argument);
   // a frame whose shutter falls outside the span
-  TimeProjection p({0.0, 0.1, 0.2}, 1, 0.1);
+  TimeProjection p({0.0, 0.1, 0.2}, 1, 0.1, TimeModel::Hold);
   EXPECT_THROW(frame_weights(p, box(180, 0), 0.3, 10), std::invalid_argument);
   EXPECT_NO_THROW(frame_weights(p, box(180, 0), 0.0, 10));
 }

@@ -119,6 +119,7 @@ SpaceTimePlan plan_frames(const std::vector<std::string>& paths, std::vector<dou
     p.frames = options.frames;
   }
   const TimeProjection tp(times, options.degree, p.options.step, options.model);
+  p.options.step = tp.step();  // the interpolating models round it to whole steps across the span
   for (long f : p.frames) {
     const double T = f / options.fps;
     std::vector<double> u;

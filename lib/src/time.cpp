@@ -248,11 +248,11 @@ void TimeProjection::add(int i, int k, double v) {
   row.v[at] += v;
 }
 
-// Acquisition of the Linear and Cubic models on [lo, hi] (the span widened
-// to the B-splines' knots, lo and hi knots): A[i][k] = (1/S) integral over
-// [lo, hi] of L_k(t) b_D(t/S - m) dt for m = first + i, over the model's
-// pieces [t_k, t_k+1] (and [lo, t_0], [t_K-1, hi] on the nearest gap's
-// polynomial, extended), L_k the Lagrange basis of the piece's nodes. Each
+// Acquisition of the Linear and Cubic models on the span [lo, hi] = [a, b]
+// (both knots): A[i][k] = (1/S) integral over [lo, hi] of
+// L_k(t) b_D((t - origin)/S - m) dt for m = first + i, over the model's
+// pieces [t_k, t_k+1] (and the half cells [lo, t_0], [t_K-1, hi] on the
+// nearest gap's polynomial), L_k the Lagrange basis of the piece's nodes. Each
 // piece of the integrand is a polynomial of degree <= 3 + 3 between the
 // B-spline's knots: gauss4 is exact. Only the pieces under row i's support.
 void TimeProjection::acquire_interpolated(double lo_all, double hi_all) {
@@ -262,13 +262,14 @@ void TimeProjection::acquire_interpolated(double lo_all, double hi_all) {
   const double r = 0.5 * (degree_ + 1), S = step_;
   for (int i = 0; i < count_; ++i) {
     const int m = first_ + i;
-    const double s0 = std::max(lo_all, S * (m - r)), s1 = std::min(hi_all, S * (m + r));
+    const double s0 = std::max(lo_all, origin_ + S * (m - r));
+    const double s1 = std::min(hi_all, origin_ + S * (m + r));
     if (!(s1 > s0)) continue;
     // pieces -1 .. K-1 meeting (s0, s1): piece p spans [t_p, t_p+1]
     const int p0 = first_true(0, K, [&](int k) { return t[k] > s0; }) - 1;
     const int p1 = first_true(0, K, [&](int k) { return t[k] >= s1; }) - 1;
     std::vector<double> bp;
-    for (int j = 0; j <= degree_ + 1; ++j) bp.push_back(S * (m - r + j));
+    for (int j = 0; j <= degree_ + 1; ++j) bp.push_back(origin_ + S * (m - r + j));
     for (int piece = p0; piece <= p1; ++piece) {
       const double lo = std::max(s0, piece < 0 ? lo_all : t[piece]);
       const double hi = std::min(s1, piece + 1 >= K ? hi_all : t[piece + 1]);
@@ -283,8 +284,9 @@ void TimeProjection::acquire_interpolated(double lo_all, double hi_all) {
           return v;
         };
         add(i, k,
-            piecewise_integral([&](double x) { return basis(x) * bspline(degree_, x / S - m); },
-                               lo, hi, bp) /
+            piecewise_integral(
+                [&](double x) { return basis(x) * bspline(degree_, (x - origin_) / S - m); }, lo,
+                hi, bp) /
                 S);
       }
     }
@@ -377,32 +379,35 @@ TimeProjection::TimeProjection(std::vector<double> times, int degree, double ste
   const double r = 0.5 * (degree + 1);
   if (model_ != TimeModel::Hold) {
     // The interpolating models: the least-squares projection of the model on
-    // [lo, hi], the span widened to the nearest knots of the B-splines
-    // (knots at S (n + delta), delta 0 for odd degrees, 1/2 for even ones),
-    // the model extended there by its end polynomials; every B-spline meeting
-    // (lo, hi) overlaps it by a whole knot interval or more (a well-posed
-    // Gram matrix), and polynomials the model and the space both hold are
-    // reproduced on the whole span, ends included.
-    const double delta = degree % 2 ? 0.0 : 0.5;
-    const int na = static_cast<int>(std::floor(a / step - delta));
-    const int nb = static_cast<int>(std::ceil(b / step - delta));
-    const double lo = step * (na + delta), hi = step * (nb + delta);
-    first_ = na + 1 - (degree + 1) / 2;
-    const int last = nb + degree / 2;
-    count_ = last - first_ + 1;
+    // the span [a, b] itself, on a lattice whose knots are a + S' j,
+    // j = 0 .. N: N = max(1, round((b - a) / S)) steps of S' = (b - a) / N,
+    // the step asked rounded so that both ends of the span are knots. Every
+    // B-spline meeting (a, b) overlaps it by a whole knot interval or more (a
+    // well-posed Gram matrix), nothing is extrapolated beyond the span, and
+    // polynomials the model and the space both hold are reproduced on the
+    // whole span, ends included. Coefficient m's centre is origin + S' m.
+    const int N = std::max(1, static_cast<int>(std::lround((b - a) / step)));
+    step_ = (b - a) / N;
+    origin_ = a + step_ * (r - std::floor(r));
+    const int fr = static_cast<int>(std::floor(r));
+    first_ = fr - degree;  // support (m - fr, m - fr + D + 1) in knot indices meets (0, N)
+    count_ = N + degree;
     rows_.assign(count_, Row{});
-    acquire_interpolated(lo, hi);
+    acquire_interpolated(a, b);
+    const double S = step_, o0 = origin_;
     factor([&](int i, int j) {
       const int m = first_ + i, n = first_ + j;
-      const double s0 = std::max(lo, step * (std::max(m, n) - r));
-      const double s1 = std::min(hi, step * (std::min(m, n) + r));
+      const double s0 = std::max(a, o0 + S * (std::max(m, n) - r));
+      const double s1 = std::min(b, o0 + S * (std::min(m, n) + r));
       if (!(s1 > s0)) return 0.0;
       std::vector<double> bp;
-      for (int k = 0; k <= degree + 1; ++k) bp.push_back(step * (m - r + k));
+      for (int k = 0; k <= degree + 1; ++k) bp.push_back(o0 + S * (m - r + k));
       return piecewise_integral(
-                 [&](double x) { return bspline(degree, x / step - m) * bspline(degree, x / step - n); },
+                 [&](double x) {
+                   return bspline(degree, (x - o0) / S - m) * bspline(degree, (x - o0) / S - n);
+                 },
                  s0, s1, bp) /
-             step;
+             S;
     });
     return;
   }
@@ -452,7 +457,7 @@ std::vector<double> TimeProjection::subframe_weights(std::vector<double> w) cons
 }
 
 std::vector<double> display_weights(const Shutter& s, double T, double fps, int degree,
-                                    double step, int first, int count) {
+                                    double step, int first, int count, double origin) {
   s.check();
   const double o = s.open(T, fps), c = s.close(T, fps);
   const std::vector<double> sbp = s.breakpoints(T, fps);
@@ -462,13 +467,15 @@ std::vector<double> display_weights(const Shutter& s, double T, double fps, int 
   const double r = 0.5 * (degree + 1);
   for (int i = 0; i < count; ++i) {
     const int m = first + i;
-    const double lo = std::max(o, step * (m - r)), hi = std::min(c, step * (m + r));
+    const double lo = std::max(o, origin + step * (m - r)), hi = std::min(c, origin + step * (m + r));
     if (!(hi > lo)) continue;
     std::vector<double> bp = sbp;
-    for (int j = 0; j <= degree + 1; ++j) bp.push_back(step * (m - r + j));
+    for (int j = 0; j <= degree + 1; ++j) bp.push_back(origin + step * (m - r + j));
     w[i] = piecewise_integral(
-               [&](double t) { return s.weight(t, T, fps) * bspline(degree, t / step - m); }, lo,
-               hi, bp) /
+               [&](double t) {
+                 return s.weight(t, T, fps) * bspline(degree, (t - origin) / step - m);
+               },
+               lo, hi, bp) /
            total;
   }
   return w;
@@ -492,7 +499,8 @@ void check_inside(const std::vector<double>& t, const Shutter& s, double T, doub
 std::vector<double> frame_weights(const TimeProjection& p, const Shutter& s, double T,
                                   double fps) {
   check_inside(p.times(), s, T, fps);
-  return p.subframe_weights(display_weights(s, T, fps, p.degree(), p.step(), p.first(), p.count()));
+  return p.subframe_weights(
+      display_weights(s, T, fps, p.degree(), p.step(), p.first(), p.count(), p.origin()));
 }
 
 std::vector<double> conventional_frame_weights(const std::vector<double>& t, const Shutter& s,

@@ -66,27 +66,31 @@ void check_times(const std::vector<double>& t);
 
 // The temporal projection of K sub-frames at times t onto the degree-D
 // B-splines of step S: coefficients m = first .. first+count-1 (every
-// B-spline whose support meets the span). Acquisition
-//   c~[m] = (1/S) integral g(t) b_D(t/S - m) dt,
-// g the model of the sub-frames (TimeModel) on the span, mirrored about both
-// of its ends (exact while the span is longer than a B-spline support); with
-// Hold, c~[m] = (1/S) sum_k f(t_k) integral over cell k of b_D(t/S - m) dt
-// (time_quadrature_weights; a constant in time is exact for uneven times),
-// from the cumulative B-spline; with Linear and Cubic each polynomial piece
-// of g times b_D is integrated exactly (Gauss-Legendre, 4 points); then the
-// prefilter: the Gram system sum_n a[m-n] c[n] = c~[m] (a = autocorrelation
-// of b_D), indices outside the range folded back by the mirror rule
-// (c[first-1-j] = c[first+j]), solved exactly (banded Cholesky: the Gram
-// matrix is symmetric positive definite). Memory: A sparse (each coefficient
-// holds the sub-frames under its support) and G banded, so linear in the
-// number of sub-frames.
+// B-spline whose support meets the span [a, b]). Acquisition
+//   c~[m] = (1/S) integral g(t) b_D((t - origin)/S - m) dt,
+// g the model of the sub-frames (TimeModel). Hold: each sub-frame over its
+// own cell (time_quadrature_weights; a constant in time is exact for uneven
+// times), exactly from the cumulative B-spline, the cells mirrored about a
+// and b (exact while the span is longer than a B-spline support); the
+// prefilter the folded Gram system sum_n a[m-n] c[n] = c~[m] (a =
+// autocorrelation of b_D, indices outside the range folded back by the
+// mirror rule c[first-1-j] = c[first+j]). Linear and cubic: each polynomial
+// piece of g times b_D integrated exactly (Gauss-Legendre, 4 points) over
+// [a, b] alone, on a lattice with knots at both ends of the span, and the
+// Gram matrix of the B-splines on [a, b] (no mirror, no extrapolation).
+// Either system is solved exactly by banded Cholesky (symmetric positive
+// definite). Memory: A sparse (each coefficient holds the sub-frames under
+// its support) and G banded, so linear in the number of sub-frames.
 class TimeProjection {
  public:
-  TimeProjection(std::vector<double> times, int degree, double step,
-                 TimeModel model = TimeModel::Hold);
+  TimeProjection(std::vector<double> times, int degree, double step, TimeModel model);
   const std::vector<double>& times() const { return t_; }
   int degree() const { return degree_; }
+  // The lattice: coefficient m's B-spline is b_D((t - origin) / step - m).
+  // Hold: origin 0 and the step asked. Linear, cubic: knots at both ends of
+  // the span, the step asked rounded to a whole number of steps across it.
   double step() const { return step_; }
+  double origin() const { return origin_; }
   TimeModel model() const { return model_; }
   int first() const { return first_; }
   int count() const { return count_; }
@@ -112,6 +116,7 @@ class TimeProjection {
   std::vector<double> t_;
   int degree_;
   double step_;
+  double origin_ = 0;
   TimeModel model_;
   int first_ = 0, count_ = 0;
   std::vector<Row> rows_;
@@ -121,10 +126,10 @@ class TimeProjection {
 };
 
 // Temporal display weights of the frame at time T:
-//   w_m = integral s(t) b_D(t/S - m) dt / integral s(t) dt,
+//   w_m = integral s(t) b_D((t - origin)/S - m) dt / integral s(t) dt,
 // exact (Gauss-Legendre on each polynomial piece), for m = first..first+count-1.
 std::vector<double> display_weights(const Shutter& s, double T, double fps, int degree,
-                                    double step, int first, int count);
+                                    double step, int first, int count, double origin = 0);
 
 // Sub-frame weights of the frame at time T for the space-time method:
 // u = TimeProjection::subframe_weights(display weights); the frame is
