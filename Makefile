@@ -546,21 +546,47 @@ endif
 ifneq ($(shell echo '$(TIME_JITTER)' | grep -Ex '[0-9]*'),$(TIME_JITTER))
 $(error TIME_JITTER=$(TIME_JITTER): expected a whole number >= 0 (a seed), or empty for regular times)
 endif
-ifeq ($(METHOD_OPTS_$(ANIM_METHOD)),)
-$(error ANIM_METHOD=$(ANIM_METHOD): not a method; known: box conv-tent me-tent mitchell me-cubic me-tent-2x2 me-cubic-2x2)
+ifeq ($(filter $(ANIM_METHOD),me-tent me-cubic me-tent-2x2 me-cubic-2x2),)
+$(error ANIM_METHOD=$(ANIM_METHOD): the space-time projection's spatial method, one of me-tent me-cubic me-tent-2x2 me-cubic-2x2 (a conventional method would make it the sub-frame average))
 endif
 ifeq ($(filter $(SWEEP_PATTERN),zoneplate bars),)
 $(error SWEEP_PATTERN=$(SWEEP_PATTERN): expected zoneplate or bars)
 endif
 ifneq ($(SAMPLES)-$(TILES)-$(FARM),regular-1-local)
-$(error make anim renders whole regular sub-frames on this machine: SAMPLES, TILES and FARM are not taken)
+$(error make anim renders whole regular sub-frames on this machine: SAMPLES=$(SAMPLES) TILES=$(TILES) FARM=$(FARM) are not taken (regular, 1, local))
+endif
+ifeq ($(shell echo '$(SHUTTER)' | grep -Ex '([0-9]+\.?[0-9]*|\.[0-9]+)(:-?([0-9]+\.?[0-9]*|\.[0-9]+))?' | awk -F: '$$1 > 0 && $$1 <= 360'),)
+$(error SHUTTER=$(SHUTTER): expected ANGLE[:PHASE] in degrees, the angle above 0 and at most 360)
+endif
+ifeq ($(filter $(SHUTTER_CURVE),box tent cubic)$(wildcard $(SHUTTER_CURVE)),)
+$(error SHUTTER_CURVE=$(SHUTTER_CURVE): expected box, tent, cubic or a table file that exists)
+endif
+ifeq ($(filter $(TIME_DEGREE),0 1 2 3),)
+$(error TIME_DEGREE=$(TIME_DEGREE): expected 0, 1, 2 or 3)
+endif
+ifeq ($(filter $(TIME_MODEL),hold linear cubic),)
+$(error TIME_MODEL=$(TIME_MODEL): expected hold, linear or cubic)
+endif
+ifeq ($(shell echo '$(SWEEP_V)' | grep -Ex -- '-?([0-9]+\.?[0-9]*|\.[0-9]+)'),)
+$(error SWEEP_V=$(SWEEP_V): expected a number (frame widths per second))
+endif
+ifeq ($(shell grep -qiw clock $(SCENEDIR)/$(SCENE).pov 2>/dev/null && echo yes),)
+$(warning make anim: $(SCENEDIR)/$(SCENE).pov does not read the clock: every sub-frame is the same image)
 endif
 endif
+# Rates as numbers (24, 24.0 and 24.00 are one rate: one folder, one name)
+override RENDER_FPS := $(shell awk 'BEGIN { printf "%g", $(RENDER_FPS) }' 2>/dev/null)
+override FPS := $(shell awk 'BEGIN { printf "%g", $(FPS) }' 2>/dev/null)
 ANIM_DIR := $(OUT)/anim/$(SCENE)-$(RES_TAG)-f$(FACTOR)-$(RENDER_FPS)fps-k$(SUBFRAMES)$(if $(TIME_JITTER),-j$(TIME_JITTER))
 ANIM_COUNT := $(shell echo $$(( $(FRAMES) * $(SUBFRAMES) )))
 # NNNN:TIME, one word per sub-frame
 ANIM_PAIRS := $(if $(ANIM_GOALS),$(shell python3 scripts/anim_times.py --frames $(FRAMES) \
   --subframes $(SUBFRAMES) --fps $(RENDER_FPS) $(if $(TIME_JITTER),--jitter $(TIME_JITTER)) --pairs))
+ifneq ($(ANIM_GOALS),)
+ifneq ($(words $(ANIM_PAIRS)),$(ANIM_COUNT))
+$(error make anim: scripts/anim_times.py gave $(words $(ANIM_PAIRS)) sub-frame times, not $(ANIM_COUNT) (is python3 there?))
+endif
+endif
 sub_of = $(ANIM_DIR)/sub.$(1).exr
 anim_subs := $(foreach p,$(ANIM_PAIRS),$(call sub_of,$(firstword $(subst :, ,$(p)))))
 ANIM_TIME_OPTS := --fps $(FPS) --shutter $(SHUTTER) --shutter-curve $(SHUTTER_CURVE)
@@ -572,38 +598,50 @@ anim_cmd_average = $(METHOD_OPTS_box) $(ANIM_TIME_OPTS) $(SIFLAGS)
 define sub_rules
 $(call sub_of,$(1)): $(SCENEDIR)/$(SCENE).pov scenes/povray.ini $(call render_stamp_of,$(SCENE)) | $(if $(PREBUILT),,setup)
 	@printf 'render   %-10s sub-frame %s of %s at t = %s s\n' $(SCENE) $(1) $(ANIM_COUNT) $(2)
-	@t=$(ANIM_DIR)/.sub.$(1).tmp; \
+	@t=$(ANIM_DIR)/.sub.$(1).tmp; trap 'rm -f $$$$t-pov.exr $$$$t.exr; exit 130' INT TERM HUP; \
 	bash scripts/render.sh $$< $$$$t-pov.exr $(RENDER_W) $(RENDER_H) $(call render_opts_of,$(SCENE)) Clock=$(2) && \
 	oiiotool $$$$t-pov.exr --attrib:type=string sis:time $(2) -o $$$$t.exr && \
 	rm -f $$$$t-pov.exr && mv -f $$$$t.exr $$@ || { rc=$$$$?; rm -f $$$$t-pov.exr $$$$t.exr; exit $$$$rc; }
 endef
 $(foreach p,$(ANIM_PAIRS),$(eval $(call sub_rules,$(firstword $(subst :, ,$(p))),$(lastword $(subst :, ,$(p))))))
 
-# $(call anim_rules,KIND): KIND-FPSfps/ frames, .mp4 and .webp
+# $(call anim_rules,KIND): KIND-FPSfps/ frames, .mp4 and .webp, made in
+# temporary names (removed on failure and on INT, TERM, HUP) and moved into
+# place when all are written. The MP4 is BT.709 (its matrix, primaries and
+# the sRGB transfer of the PNG frames), tagged so.
 define anim_rules
 $(ANIM_DIR)/.$(1)-$(FPS)fps.cmd: FORCE
-	$$(call stamp,$$@,$(anim_cmd_$(1)))
+	$$(call stamp,$$@,$(anim_cmd_$(1)) | $(ANIM_COUNT) sub-frames)
 
-$(ANIM_DIR)/$(1)-$(FPS)fps.mp4 $(ANIM_DIR)/$(1)-$(FPS)fps.webp &: $(anim_subs) $(SIPROJECT) $(ANIM_DIR)/.$(1)-$(FPS)fps.cmd
-	@d=$(ANIM_DIR)/$(1)-$(FPS)fps; t=$(ANIM_DIR)/.$(1)-$(FPS)fps.tmp; rm -rf $$$$t; mkdir -p $$$$t && \
+$(ANIM_DIR)/$(1)-$(FPS)fps.mp4 $(ANIM_DIR)/$(1)-$(FPS)fps.webp &: $(anim_subs) $(SIPROJECT) $(ANIM_DIR)/.$(1)-$(FPS)fps.cmd $(wildcard $(SHUTTER_CURVE))
+	@d=$(ANIM_DIR)/$(1)-$(FPS)fps; t=$(ANIM_DIR)/.$(1)-$(FPS)fps.tmp; \
+	clean() { rm -rf $$$$t $$$$t.mp4 $$$$t.webp $$$$t.old; }; trap 'clean; exit 130' INT TERM HUP; \
+	clean; mkdir -p $$$$t && \
 	$(SIPROJECT) $(anim_subs) --size $(RES_W)x$(RES_H) $(anim_cmd_$(1)) -o $$$$t/frame.#.png -q && \
 	first=$$$$(ls $$$$t | head -1 | sed 's/frame\.0*\([0-9][0-9]*\)\.png/\1/') && \
 	ffmpeg -nostdin -y -loglevel error -framerate $(FPS) -start_number $$$$first -i $$$$t/frame.%04d.png \
-	  -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' -c:v libx264 -pix_fmt yuv420p -crf 16 -movflags +faststart $$$$t.mp4 && \
+	  -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2,scale=out_color_matrix=bt709:out_range=tv,format=yuv420p' \
+	  -colorspace bt709 -color_primaries bt709 -color_trc iec61966-2-1 -color_range tv \
+	  -c:v libx264 -crf 16 -movflags +faststart $$$$t.mp4 && \
 	ffmpeg -nostdin -y -loglevel error -framerate $(FPS) -start_number $$$$first -i $$$$t/frame.%04d.png \
 	  -c:v libwebp_anim -lossless 1 -loop 0 $$$$t.webp && \
-	rm -rf $$$$d && mv -f $$$$t $$$$d && mv -f $$$$t.mp4 $$$$d.mp4 && mv -f $$$$t.webp $$$$d.webp || \
-	{ rc=$$$$?; rm -rf $$$$t $$$$t.mp4 $$$$t.webp; exit $$$$rc; }
+	{ [ ! -e $$$$d ] || mv -f $$$$d $$$$t.old; } && mv -f $$$$t $$$$d && rm -rf $$$$t.old && \
+	mv -f $$$$t.mp4 $$$$d.mp4 && mv -f $$$$t.webp $$$$d.webp || \
+	{ rc=$$$$?; clean; exit $$$$rc; }
 	@printf 'frames   %-10s %-9s %s frames at %s fps -> %s\n' $(SCENE) $(1) $$$$(ls $(ANIM_DIR)/$(1)-$(FPS)fps | wc -l) $(FPS) $(ANIM_DIR)/$(1)-$(FPS)fps.mp4
 endef
-# The average only at the rendered rate: at another rate a frame's shutter
-# may hold no sub-frame (the frame-rate conversion is the space-time
-# projection's).
-ANIM_KINDS := spacetime $(if $(filter $(FPS),$(RENDER_FPS)),average)
+# The average only at the rendered rate and with a shutter at least one
+# sub-frame's cell long (ANGLE x SUBFRAMES >= 360), so that every frame's
+# shutter holds a sub-frame, jittered or not; otherwise a frame may have
+# none to average (the frame-rate conversion is the space-time projection's).
+ANIM_ANGLE := $(firstword $(subst :, ,$(SHUTTER)))
+ANIM_AVERAGE := $(and $(filter $(FPS),$(RENDER_FPS)),$(shell awk 'BEGIN { if ($(ANIM_ANGLE) * $(SUBFRAMES) >= 360) print 1 }' 2>/dev/null))
+ANIM_KINDS := spacetime $(if $(ANIM_AVERAGE),average)
 $(foreach k,$(ANIM_KINDS),$(eval $(call anim_rules,$(k))))
 
 $(ANIM_DIR)/index-$(FPS)fps.html: $(foreach k,$(ANIM_KINDS),$(ANIM_DIR)/$(k)-$(FPS)fps.webp) scripts/anim_page.py
 	@$(PYTHON) scripts/anim_page.py --dir $(ANIM_DIR) --fps $(FPS) --render-fps $(RENDER_FPS) --scene $(SCENE) \
+	  --subframes $(ANIM_COUNT) \
 	  --spacetime '$(anim_cmd_spacetime)' $(if $(filter average,$(ANIM_KINDS)),--average '$(anim_cmd_average)') -o $@
 
 .PHONY: anim anim-subframes

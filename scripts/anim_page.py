@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """The page of an animation (make anim): the space-time frames and the
-sub-frame average side by side as animated WebPs, with their MP4s, the
-options each was made with, and the sub-frames' times.
+sub-frame average side by side as animated WebPs, with their MP4s and the
+options each was made with.
 
-    anim_page.py --dir D --fps R --scene S --spacetime OPTS --average OPTS -o D/index-Rfps.html
+    anim_page.py --dir D --fps R --render-fps R0 --scene S --subframes N
+        --spacetime OPTS [--average OPTS] -o D/index-Rfps.html
 """
 import argparse
 import html
@@ -21,9 +22,9 @@ def main(argv=None):
     p.add_argument("--spacetime", required=True)
     p.add_argument("--average", help="the average's options (frames at the rendered rate only)")
     p.add_argument("--render-fps", required=True)
+    p.add_argument("--subframes", type=int, required=True, help="the sub-frames the frames were formed from")
     p.add_argument("-o", "--output", required=True)
     a = p.parse_args(argv)
-    subs = sorted(f for f in os.listdir(a.dir) if f.startswith("sub.") and f.endswith(".exr"))
     cells = []
     kinds = [("spacetime", a.spacetime, "space-time min-error projection")]
     if a.average is not None:
@@ -38,14 +39,14 @@ def main(argv=None):
             f"<code>siproject sub.*.exr {html.escape(opts)}</code></figcaption></figure>"
         )
     note = (" two ways" if a.average is not None else
-            f": frame-rate conversion from {html.escape(a.render_fps)} fps, which only the space-time "
-            "projection makes (a frame's shutter may hold no sub-frame to average)")
+            " by the space-time projection alone: at another rate than the rendered one, or with a "
+            "shutter shorter than a sub-frame's cell, a frame's shutter may hold no sub-frame to average")
     page = f"""<!doctype html>
 <html><head><meta charset="utf-8"><title>{html.escape(a.scene)}: animation at {html.escape(a.fps)} fps</title>
 <style>body {{ font-family: sans-serif; margin: 1.5em; }} figure {{ display: inline-block; margin: 0 1.5em 1em 0; vertical-align: top; max-width: 46%; }}
 img {{ image-rendering: pixelated; width: 100%; }} code {{ font-size: 0.85em; }}</style></head>
 <body><h1>{html.escape(a.scene)}: animation at {html.escape(a.fps)} fps</h1>
-<p>{len(subs)} sub-frames rendered by POV-Ray (<code>{html.escape(subs[0] if subs else '')}</code> ...,
+<p>{a.subframes} sub-frames rendered by POV-Ray (<code>sub.0000.exr</code> ...,
 each with its time in <code>sis:time</code>) for {html.escape(a.render_fps)} fps, formed into frames by <code>siproject --fps</code>{note}.
 docs/design.md section 16 says what the space-time projection computes.</p>
 {''.join(cells)}

@@ -10,8 +10,8 @@
 #     ffprobe: the MP4 is H.264, 4 frames of 24 x 24 at 24 fps, the WebP is
 #     animated with 4 frames; the page shows both WebPs;
 #   - make's dependencies: a second run redoes nothing; FPS=60 forms frames
-#     0 to 9 from the same sub-frames without rendering (space-time only: no
-#     sub-frame falls inside a 60 fps frame's shutter); TIME_JITTER=5 gives
+#     0 to 9 from the same sub-frames without rendering (space-time only: at
+#     another rate a frame's shutter may hold no sub-frame); TIME_JITTER=5 gives
 #     other times, each inside its own half of its frame;
 #   - bad variables stop make before anything is rendered, naming them.
 set -euo pipefail
@@ -78,6 +78,18 @@ done
 mk "$tmp/run2.log" anim || die "second make anim failed"
 grep -Eq '^(render|frames) ' "$tmp/run2.log" && fail "second run redid work: $(cat "$tmp/run2.log")"
 
+mk "$tmp/run24.log" FPS=24.0 anim || die "make anim FPS=24.0 failed"
+grep -Eq '^(render|frames) ' "$tmp/run24.log" && fail "FPS=24.0 is not the same rate as 24: $(cat "$tmp/run24.log")"
+mk "$tmp/run3.log" FRAMES=3 anim || die "make anim FRAMES=3 failed"
+grep -q '^render ' "$tmp/run3.log" && fail "FRAMES=3 rendered again"
+n=$(ls "$dir/spacetime-24fps" | grep -c '^frame\.[0-9]*\.png$' || true)
+[ "$n" -eq 3 ] || fail "FRAMES=3: $n frames, expected 3 (the 4-frame video left in place?)"
+probe=$(ffprobe -v error -count_frames -show_entries stream=nb_read_frames,color_space -of default=noprint_wrappers=1 "$dir/spacetime-24fps.mp4")
+grep -qx 'nb_read_frames=3' <<<"$probe" || fail "FRAMES=3: the MP4 is not 3 frames: $probe"
+grep -qx 'color_space=bt709' <<<"$probe" || fail "the MP4 is not tagged BT.709: $probe"
+grep -q '>6 sub-frames rendered' "$dir/index-24fps.html" || grep -q '6 sub-frames rendered' "$dir/index-24fps.html" ||
+  fail "the page does not count the 6 sub-frames the frames came from"
+
 mk "$tmp/run60.log" FPS=60 anim || { cat "$tmp/run60.log" >&2; die "make anim FPS=60 failed"; }
 grep -q '^render ' "$tmp/run60.log" && fail "FPS=60 rendered again"
 n=$(ls "$dir/spacetime-60fps" | grep -c '^frame\.[0-9]*\.png$' || true)
@@ -94,13 +106,15 @@ for n in 0 1 2 3 4 5 6 7; do
     fail "jittered sub-frame $n at '$t' s: not inside its own cell, or not moved"
 done
 
-for bad in "FRAMES=0" "SUBFRAMES=x" "FPS=-1" "TIME_JITTER=a" "ANIM_METHOD=nope" "SWEEP_PATTERN=dots" "TILES=2"; do
-  name=${bad%%=*}
+for bad in "FRAMES=0" "SUBFRAMES=x" "FPS=-1" "TIME_JITTER=a" "ANIM_METHOD=nope" "ANIM_METHOD=box" \
+           "SWEEP_PATTERN=dots" "TILES=2" "SHUTTER=400" "SHUTTER_CURVE=nofile.txt" "TIME_DEGREE=4" \
+           "TIME_MODEL=spline" "SWEEP_V=fast"; do
+  name=$bad
   if make -C "$src" --no-print-directory OUT="$tmp/bad" SIPROJECT="$siproject" SCENE=sweep RES=24 \
        "$bad" anim >"$tmp/bad.log" 2>&1; then
     fail "make anim $bad succeeded"
   fi
-  grep -q "$name" "$tmp/bad.log" || fail "make anim $bad: message does not name $name: $(cat "$tmp/bad.log")"
+  grep -qF "$name" "$tmp/bad.log" || fail "make anim $bad: message does not name $name: $(cat "$tmp/bad.log")"
   [ ! -e "$tmp/bad/anim" ] || fail "make anim $bad left $tmp/bad/anim"
 done
 

@@ -71,8 +71,14 @@ def test_the_cubic_model_integrates_cubics_in_time_exactly(shutter):
 
 def test_bad_requests_name_the_argument():
     t = regular(4, 2, 24)
-    with pytest.raises(ValueError, match="--time-model"):
+    with pytest.raises(ValueError, match="model="):
         siproject.frame_weights(t, fps=24, time=1 / 24, model="spline")
+    with pytest.raises(ValueError, match="shutter="):
+        siproject.frame_weights(t, fps=24, time=1 / 24, shutter="400")
+    with pytest.raises(ValueError, match="before the previous one"):
+        siproject.frame_weights(t[::-1], fps=24, time=1 / 24)
+    with pytest.raises(ValueError, match="the same time"):
+        siproject.frame_weights([0.1, 0.1, 0.2], fps=24, time=0.1)
     with pytest.raises(ValueError, match="outside the sub-frames' span"):
         siproject.frame_weights(t, fps=24, time=10.0)
     with pytest.raises(ValueError, match="fps"):

@@ -645,12 +645,19 @@ def frame_weights(times: Sequence[float], *, fps: float, time: float, shutter: s
         raise ValueError(f"fps={fps!r}: not a positive number")
     if s is not None and not (s > 0 and math.isfinite(s)):
         raise ValueError(f"step={step!r}: not a positive number of seconds")
-    return np.asarray(_core._frame_weights(t, r, T, _text("shutter", shutter),
-                                           _text("shutter_curve", shutter_curve),
-                                           _whole("degree", degree, (0, 3)),
-                                           (t[-1] - t[0]) / (len(t) - 1) if s is None and len(t) > 1
-                                           else (1.0 / r if s is None else s), _text("model", model),
-                                           m == "conventional"), dtype=np.float64)
+    try:
+        w = _core._frame_weights(t, r, T, _text("shutter", shutter),
+                                 _text("shutter_curve", shutter_curve),
+                                 _whole("degree", degree, (0, 3)), 0.0 if s is None else s,
+                                 _text("model", model), m == "conventional")
+    except ValueError as e:
+        # the engine's messages name siproject's options; here the keywords
+        text = str(e)
+        for option, keyword in (("--time-model", "model="), ("--shutter-curve", "shutter_curve="),
+                                ("--shutter", "shutter=")):
+            text = text.replace(option, keyword)
+        raise ValueError(text) from None
+    return np.asarray(w, dtype=np.float64)
 
 
 
