@@ -237,9 +237,9 @@ TEST(Time, InterpolatingModelsReproduceTheirPolynomials) {
   }
 }
 
-// A degree above the model's is not reproduced: the models differ, and the
-// hold's O(h^2) error on a quadratic is what the linear and cubic models remove
-// in part and in whole (D = 3, quadratic, 4 sub-frames per step).
+// A degree above the model's is not reproduced: on a quadratic (D = 3, 4
+// sub-frames per step) the hold and the linear model both leave an O(h^2)
+// error, which the cubic model removes.
 TEST(Time, HigherModelsReduceTheHoldsError) {
   const double S = 0.1;
   const std::vector<double> t = centres(0, S, 60, 4);
