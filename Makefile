@@ -558,7 +558,10 @@ endif
 ifeq ($(shell echo '$(SHUTTER)' | grep -Ex '([0-9]+\.?[0-9]*|\.[0-9]+)(:-?([0-9]+\.?[0-9]*|\.[0-9]+))?' | awk -F: '$$1 > 0 && $$1 <= 360'),)
 $(error SHUTTER=$(SHUTTER): expected ANGLE[:PHASE] in degrees, the angle above 0 and at most 360)
 endif
-ifeq ($(filter $(SHUTTER_CURVE),box tent cubic)$(wildcard $(SHUTTER_CURVE)),)
+ifneq ($(words $(ANIM_METHOD) $(TIME_DEGREE) $(TIME_MODEL) $(SHUTTER) $(SHUTTER_CURVE) $(SWEEP_V)),6)
+$(error make anim: ANIM_METHOD, TIME_DEGREE, TIME_MODEL, SHUTTER, SHUTTER_CURVE and SWEEP_V take one word each (a SHUTTER_CURVE path without blanks))
+endif
+ifeq ($(filter $(SHUTTER_CURVE),box tent cubic)$(shell test -f '$(SHUTTER_CURVE)' && echo file),)
 $(error SHUTTER_CURVE=$(SHUTTER_CURVE): expected box, tent, cubic or a table file that exists)
 endif
 ifeq ($(filter $(TIME_DEGREE),0 1 2 3),)
@@ -575,8 +578,8 @@ $(warning make anim: $(SCENEDIR)/$(SCENE).pov does not read the clock: every sub
 endif
 endif
 # Rates as numbers (24, 24.0 and 24.00 are one rate: one folder, one name)
-override RENDER_FPS := $(shell awk 'BEGIN { printf "%g", $(RENDER_FPS) }' 2>/dev/null)
-override FPS := $(shell awk 'BEGIN { printf "%g", $(FPS) }' 2>/dev/null)
+override RENDER_FPS := $(shell awk 'BEGIN { printf "%.12g", $(RENDER_FPS) }' 2>/dev/null)
+override FPS := $(shell awk 'BEGIN { printf "%.12g", $(FPS) }' 2>/dev/null)
 ANIM_DIR := $(OUT)/anim/$(SCENE)-$(RES_TAG)-f$(FACTOR)-$(RENDER_FPS)fps-k$(SUBFRAMES)$(if $(TIME_JITTER),-j$(TIME_JITTER))
 ANIM_COUNT := $(shell echo $$(( $(FRAMES) * $(SUBFRAMES) )))
 # NNNN:TIME, one word per sub-frame
@@ -598,7 +601,8 @@ anim_cmd_average = $(METHOD_OPTS_box) $(ANIM_TIME_OPTS) $(SIFLAGS)
 define sub_rules
 $(call sub_of,$(1)): $(SCENEDIR)/$(SCENE).pov scenes/povray.ini $(call render_stamp_of,$(SCENE)) | $(if $(PREBUILT),,setup)
 	@printf 'render   %-10s sub-frame %s of %s at t = %s s\n' $(SCENE) $(1) $(ANIM_COUNT) $(2)
-	@t=$(ANIM_DIR)/.sub.$(1).tmp; trap 'rm -f $$$$t-pov.exr $$$$t.exr; exit 130' INT TERM HUP; \
+	@t=$(ANIM_DIR)/.sub.$(1).tmp; trap 'rm -f $$$$t-pov.exr $$$$t.exr; exit 130' INT HUP; \
+	trap 'rm -f $$$$t-pov.exr $$$$t.exr; exit 143' TERM; \
 	bash scripts/render.sh $$< $$$$t-pov.exr $(RENDER_W) $(RENDER_H) $(call render_opts_of,$(SCENE)) Clock=$(2) && \
 	oiiotool $$$$t-pov.exr --attrib:type=string sis:time $(2) -o $$$$t.exr && \
 	rm -f $$$$t-pov.exr && mv -f $$$$t.exr $$@ || { rc=$$$$?; rm -f $$$$t-pov.exr $$$$t.exr; exit $$$$rc; }
@@ -615,7 +619,8 @@ $(ANIM_DIR)/.$(1)-$(FPS)fps.cmd: FORCE
 
 $(ANIM_DIR)/$(1)-$(FPS)fps.mp4 $(ANIM_DIR)/$(1)-$(FPS)fps.webp &: $(anim_subs) $(SIPROJECT) $(ANIM_DIR)/.$(1)-$(FPS)fps.cmd $(wildcard $(SHUTTER_CURVE))
 	@d=$(ANIM_DIR)/$(1)-$(FPS)fps; t=$(ANIM_DIR)/.$(1)-$(FPS)fps.tmp; \
-	clean() { rm -rf $$$$t $$$$t.mp4 $$$$t.webp $$$$t.old; }; trap 'clean; exit 130' INT TERM HUP; \
+	clean() { { [ ! -e $$$$t.old ] || [ -e $$$$d ] || mv -f $$$$t.old $$$$d; }; rm -rf $$$$t $$$$t.mp4 $$$$t.webp $$$$t.old; }; \
+	trap 'clean; exit 130' INT HUP; trap 'clean; exit 143' TERM; \
 	clean; mkdir -p $$$$t && \
 	$(SIPROJECT) $(anim_subs) --size $(RES_W)x$(RES_H) $(anim_cmd_$(1)) -o $$$$t/frame.#.png -q && \
 	first=$$$$(ls $$$$t | head -1 | sed 's/frame\.0*\([0-9][0-9]*\)\.png/\1/') && \
@@ -630,12 +635,13 @@ $(ANIM_DIR)/$(1)-$(FPS)fps.mp4 $(ANIM_DIR)/$(1)-$(FPS)fps.webp &: $(anim_subs) $
 	{ rc=$$$$?; clean; exit $$$$rc; }
 	@printf 'frames   %-10s %-9s %s frames at %s fps -> %s\n' $(SCENE) $(1) $$$$(ls $(ANIM_DIR)/$(1)-$(FPS)fps | wc -l) $(FPS) $(ANIM_DIR)/$(1)-$(FPS)fps.mp4
 endef
-# The average only at the rendered rate and with a shutter at least one
-# sub-frame's cell long (ANGLE x SUBFRAMES >= 360), so that every frame's
-# shutter holds a sub-frame, jittered or not; otherwise a frame may have
-# none to average (the frame-rate conversion is the space-time projection's).
-ANIM_ANGLE := $(firstword $(subst :, ,$(SHUTTER)))
-ANIM_AVERAGE := $(and $(filter $(FPS),$(RENDER_FPS)),$(shell awk 'BEGIN { if ($(ANIM_ANGLE) * $(SUBFRAMES) >= 360) print 1 }' 2>/dev/null))
+# The average only at the rendered rate and where every frame's shutter
+# holds a sub-frame (scripts/anim_times.py --average-ok checks the frames
+# siproject forms, on the times as written); otherwise a frame may have none
+# to average (the frame-rate conversion is the space-time projection's).
+ANIM_AVERAGE := $(and $(ANIM_GOALS),$(filter $(FPS),$(RENDER_FPS)),$(shell python3 scripts/anim_times.py \
+  --frames $(FRAMES) --subframes $(SUBFRAMES) --fps $(RENDER_FPS) $(if $(TIME_JITTER),--jitter $(TIME_JITTER)) \
+  --average-ok $(SHUTTER) --out-fps $(FPS)))
 ANIM_KINDS := spacetime $(if $(ANIM_AVERAGE),average)
 $(foreach k,$(ANIM_KINDS),$(eval $(call anim_rules,$(k))))
 

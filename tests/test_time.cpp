@@ -269,3 +269,54 @@ TEST(Time, ModelSpellings) {
   for (TimeModel m : {TimeModel::Hold, TimeModel::Linear, TimeModel::Cubic})
     EXPECT_EQ(parse_time_model(time_model_name(m)), m);
 }
+
+// The same on the smallest sequences (2, 3 and 5 sub-frames, where the cubic
+// model falls to the line and the quadratic), with one lattice step across
+// the whole span (N = 1) and steps that do not divide it, at times near 0
+// and near 1e4 s (the lattice's origin is the span's start). Rounding: the
+// times near 1e4 s carry 1e4 x 2^-52 ~ 2e-12 s against spans of ~0.1 s,
+// scaled by the basis' slopes: 1e-8 is ample.
+TEST(Time, SmallSequencesReproduceTheirPolynomials) {
+  for (int K : {2, 3, 5}) {
+    for (double offset : {0.0, 1e4}) {
+      std::vector<double> t;
+      for (int k = 0; k < K; ++k) t.push_back(offset + 0.04 * (k + 0.3 * std::sin(2.3 * k)));
+      double a, b;
+      time_span(t, a, b);
+      for (TimeModel tm : {TimeModel::Linear, TimeModel::Cubic}) {
+        const int q = tm == TimeModel::Linear ? 1 : std::min(3, K - 1);
+        for (int D = 0; D <= 3; ++D) {
+          for (double step : {0.04, 3 * (b - a), (b - a) / 2.6}) {
+            TimeProjection p(t, D, step, tm);
+            EXPECT_NEAR(p.origin(), a + p.step() * (0.5 * (D + 1) - std::floor(0.5 * (D + 1))), 1e-12);
+            for (int n = 0; n <= std::min(q, D); ++n) {
+              auto f = [&](double x) { return std::pow((x - a) / (b - a) - 0.3, n); };
+              std::vector<double> v;
+              for (double x : t) v.push_back(f(x));
+              const std::vector<double> c = p.coefficients(v);
+              double worst = 0;
+              // inside the span: a box B-spline is half-open, zero at its right end
+              for (int i = 0; i <= 97; ++i) {
+                const double x = a + (b - a) * std::min(i / 97.0, 1 - 1e-9);
+                worst = std::max(worst, std::abs(model(p, c, x) - f(x)));
+              }
+              EXPECT_LT(worst, 1e-8) << "K " << K << " offset " << offset << " "
+                                     << time_model_name(tm) << " D " << D << " step " << step
+                                     << " n " << n;
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
+// The hold's single mirror needs a span longer than a B-spline's support;
+// shorter spans are refused rather than giving weights that do not sum to 1,
+// and so are lattices of more than 1e7 steps.
+TEST(Time, HoldNeedsASpanLongerThanTheSupport) {
+  EXPECT_THROW(TimeProjection({0.0, 0.1}, 3, 0.1, TimeModel::Hold), std::invalid_argument);
+  EXPECT_NO_THROW(TimeProjection({0.0, 0.1}, 1, 0.1, TimeModel::Hold));
+  EXPECT_NO_THROW(TimeProjection({0.0, 0.1}, 3, 0.1, TimeModel::Cubic));
+  EXPECT_THROW(TimeProjection({0.0, 0.1}, 1, 1e-12, TimeModel::Cubic), std::invalid_argument);
+}

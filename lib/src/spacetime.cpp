@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include <OpenImageIO/imageio.h>
 
@@ -118,14 +119,22 @@ SpaceTimePlan plan_frames(const std::vector<std::string>& paths, std::vector<dou
   } else {
     p.frames = options.frames;
   }
-  const TimeProjection tp(times, options.degree, p.options.step, options.model);
-  p.options.step = tp.step();  // the interpolating models round it to whole steps across the span
+  // the temporal projection (the conventional method needs none)
+  std::optional<TimeProjection> tp;
+  if (!p.conventional) {
+    try {
+      tp.emplace(times, options.degree, p.options.step, options.model);
+    } catch (const std::invalid_argument& e) {
+      throw RequestError(e.what());
+    }
+    p.options.step = tp->step();  // the interpolating models round it to whole steps across the span
+  }
   for (long f : p.frames) {
     const double T = f / options.fps;
     std::vector<double> u;
     try {
       u = p.conventional ? conventional_frame_weights(times, s, T, options.fps)
-                         : frame_weights(tp, s, T, options.fps);
+                         : frame_weights(*tp, s, T, options.fps);
     } catch (const std::invalid_argument& e) {
       throw RequestError("--frames: frame " + std::to_string(f) + ": " + e.what());
     }

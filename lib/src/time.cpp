@@ -377,6 +377,11 @@ TimeProjection::TimeProjection(std::vector<double> times, int degree, double ste
   double a, b;
   time_span(t_, a, b);
   const double r = 0.5 * (degree + 1);
+  // the lattice must stay a size to hold (and an int to index)
+  if ((b - a) / step > 1e7)
+    throw std::invalid_argument("--time-step " + num(step) + ": " + num((b - a) / step) +
+                                " steps across the sub-frames' span of " + num(b - a) +
+                                " s; at most 1e7");
   if (model_ != TimeModel::Hold) {
     // The interpolating models: the least-squares projection of the model on
     // the span [a, b] itself, on a lattice whose knots are a + S' j,
@@ -411,6 +416,15 @@ TimeProjection::TimeProjection(std::vector<double> times, int degree, double ste
     });
     return;
   }
+  // the hold's cells are mirrored once about each end: exact while the span
+  // is longer than a B-spline's support, and refused otherwise (the weights
+  // would no longer sum to 1)
+  if ((degree + 1) * step > b - a)
+    throw std::invalid_argument(
+        "time: the hold model needs the sub-frames' span (" + num(b - a) +
+        " s) to be longer than a B-spline's support (" + std::to_string(degree + 1) +
+        " steps of " + num(step) + " s): a smaller --time-step, a lower --time-degree or more "
+        "sub-frames");
   // every m with (m - r, m + r) meeting (a/S, b/S)
   first_ = static_cast<int>(std::floor(a / step - r)) + 1;
   const int last = static_cast<int>(std::ceil(b / step + r)) - 1;

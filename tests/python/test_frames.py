@@ -71,10 +71,16 @@ def test_the_cubic_model_integrates_cubics_in_time_exactly(shutter):
 
 def test_bad_requests_name_the_argument():
     t = regular(4, 2, 24)
-    with pytest.raises(ValueError, match="model="):
+    with pytest.raises(ValueError, match="^model: 'spline' is not a model"):
         siproject.frame_weights(t, fps=24, time=1 / 24, model="spline")
-    with pytest.raises(ValueError, match="shutter="):
+    with pytest.raises(ValueError, match="^model: "):
+        siproject.frame_weights(t, fps=24, time=1 / 24, model="spline", method="conventional")
+    with pytest.raises(ValueError, match="^shutter: angle 400 outside"):
         siproject.frame_weights(t, fps=24, time=1 / 24, shutter="400")
+    with pytest.raises(ValueError, match="the hold model needs the sub-frames' span"):
+        siproject.frame_weights(t[:2], fps=24, time=0.0, model="hold", degree=3, shutter="1")
+    with pytest.raises(ValueError, match="at most 1e7"):
+        siproject.frame_weights(t, fps=24, time=1 / 24, step=1e-12)
     with pytest.raises(ValueError, match="before the previous one"):
         siproject.frame_weights(t[::-1], fps=24, time=1 / 24)
     with pytest.raises(ValueError, match="the same time"):

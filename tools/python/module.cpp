@@ -764,10 +764,11 @@ PYBIND11_MODULE(_core, m) {
                              double step, const std::string& model, bool conventional) {
     return translated(false, [&] {
       const Shutter s = parse_shutter(shutter, curve);
+      const TimeModel tm = parse_time_model(model);
       if (conventional) return conventional_frame_weights(times, s, T, fps);
       check_times(times);  // before the default step (their mean spacing) is taken
       if (!(step > 0)) step = (times.back() - times.front()) / double(times.size() - 1);
-      const TimeProjection p(times, degree, step, parse_time_model(model));
+      const TimeProjection p(times, degree, step, tm);
       return frame_weights(p, s, T, fps);
     });
   });

@@ -653,8 +653,9 @@ def frame_weights(times: Sequence[float], *, fps: float, time: float, shutter: s
     except ValueError as e:
         # the engine's messages name siproject's options; here the keywords
         text = str(e)
-        for option, keyword in (("--time-model", "model="), ("--shutter-curve", "shutter_curve="),
-                                ("--shutter", "shutter=")):
+        for option, keyword in (("--time-model", "model"), ("--shutter-curve", "shutter_curve"),
+                                ("--time-step", "step"), ("--shutter", "shutter")):
+            text = text.replace(option + ": " + option[2:] + ": ", keyword + ": ")
             text = text.replace(option, keyword)
         raise ValueError(text) from None
     return np.asarray(w, dtype=np.float64)
