@@ -39,17 +39,13 @@ import numpy as np
 from scipy.stats import spearmanr
 
 import siproject
+from renders import render_path  # noqa: E402  (make render's own names)
 
 ESTIMATORS = ("halves", "contrast", "residual", "highpass")
 UNIFORM = (4, 8, 12, 16, 24, 32, 64)
 BUDGETS = (6, 8, 12, 16, 24, 32)
 FINE = 64
 BASE = 4
-
-
-def render_path(work, scene, res, factor, pattern, seed):
-    tag = "" if pattern == "regular" else f"-{pattern}-s{seed}"
-    return os.path.join(work, "render", f"{scene}-{res}-f{factor}{tag}.exr")
 
 
 def need(path):

@@ -38,6 +38,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 import siproject  # noqa: E402
 
+from renders import render_path  # noqa: E402  (make render's own names)
 from report_compare import SEED_HP  # noqa: E402
 
 METHODS = {
@@ -60,11 +61,6 @@ SEED_ORDER = sorted(METHODS, key=lambda m: -SEED_HP[m])
 
 class StudyError(Exception):
     pass
-
-
-def render_path(work, scene, res, factor, pattern, seed):
-    tag = "" if pattern == "regular" else f"-{pattern}-s{seed}"
-    return os.path.join(work, "render", f"{scene}-{res}-f{factor}{tag}.exr")
 
 
 def render_seconds(path):

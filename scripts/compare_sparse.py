@@ -25,14 +25,10 @@ import numpy as np
 from scipy.interpolate import griddata
 
 import siproject
+from renders import render_path  # noqa: E402  (make render's own names)
 
 DENSITIES = (("0.25", "0.5"), ("0.5", "0.70710678"), ("1", "1"))  # (rays per pixel, FACTOR)
 RULES = ("variational", "fit", "normalised")
-
-
-def render_path(work, scene, res, factor, pattern, seed):
-    tag = "" if pattern == "regular" else f"-{pattern}-s{seed}"
-    return os.path.join(work, "render", f"{scene}-{res}-f{factor}{tag}.exr")
 
 
 def need(path):

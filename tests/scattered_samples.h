@@ -24,6 +24,16 @@ inline void expect_error(const std::function<void()>& f, const std::string& part
   }
 }
 
+// The Cartesian space of the degree-`degree` B-spline on a W x H frame.
+inline ScatteredTarget target(double W, double H, int degree, Boundary b) {
+  ScatteredTarget t;
+  t.width = W;
+  t.height = H;
+  t.space = CartesianSpace{Kernel::bspline(degree)};
+  t.boundary = b;
+  return t;
+}
+
 // Uniform in [0, 1), 53 bits.
 inline double uniform(std::mt19937_64& g) { return double(g() >> 11) * 0x1p-53; }
 

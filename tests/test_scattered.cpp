@@ -27,20 +27,12 @@ using test::dense_solve;
 using test::jittered;
 using test::random_samples;
 using test::expect_error;
+using test::target;
 using test::smooth;
 using test::uniform;
 
 const Kernel& generator_of(const ScatteredTarget& t) {
   return std::get<CartesianSpace>(t.space).generator;
-}
-
-ScatteredTarget target(double W, double H, int degree, Boundary b) {
-  ScatteredTarget t;
-  t.width = W;
-  t.height = H;
-  t.space = CartesianSpace{Kernel::bspline(degree)};
-  t.boundary = b;
-  return t;
 }
 
 // sum over the images of x (mirror: x + 2 L k and -x + 2 L k; periodic:

@@ -23,15 +23,7 @@ namespace {
 using test::dense_solve;
 using test::random_samples;
 using test::uniform;
-
-ScatteredTarget target(double W, double H, int degree, Boundary b) {
-  ScatteredTarget t;
-  t.width = W;
-  t.height = H;
-  t.space = CartesianSpace{Kernel::bspline(degree)};
-  t.boundary = b;
-  return t;
-}
+using test::target;
 
 ScatteredOptions variational(std::optional<double> lambda, int order = 2) {
   ScatteredOptions o;
