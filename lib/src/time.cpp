@@ -503,7 +503,7 @@ void check_inside(const std::vector<double>& t, const Shutter& s, double T, doub
   // computed in double may miss the span's ends by rounding.
   const double slack = 1e-9 * (b - a);
   const double o = s.open(T, fps), c = s.close(T, fps);
-  if (o < a - slack || c > b + slack)
+  if (!(o >= a - slack && c <= b + slack))  // NaN times fail too
     throw std::invalid_argument("time: the shutter of the frame at " + num(T) + " s, [" + num(o) +
                                 ", " + num(c) + "), is outside the sub-frames' span [" + num(a) +
                                 ", " + num(b) + "]");

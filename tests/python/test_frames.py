@@ -93,6 +93,8 @@ def test_bad_requests_name_the_argument():
         siproject.frame_weights(t, fps=24, time=1 / 24, method="average")
     with pytest.raises(ValueError, match="degree"):
         siproject.frame_weights(t, fps=24, time=1 / 24, degree=4)
+    with pytest.raises(ValueError, match="outside the sub-frames' span"):
+        siproject.frame_weights(t, fps=24, time=float("nan"))
     with pytest.raises(ValueError, match="at least two"):
         siproject.frame_weights([0.1], fps=24, time=0.1)
 
