@@ -60,6 +60,13 @@
 #                    --account=A --time=1:00:00)
 #   FARM_CPUS=1      cores per task: sbatch --cpus-per-task, POV-Ray +WT,
 #                    siproject --threads
+#   POV_THREADS=     POV-Ray's threads per render (+WT); by default every core
+#                    for a whole render and 1 for each band (TILES > 1, which
+#                    make -j runs in parallel). One thread renders the same
+#                    pixels on every run; more can differ from run to run in a
+#                    few pixels of soft shadows (POV-Ray 3.7's shadow cache,
+#                    docs/pipeline.md), so a split equals the single render bit
+#                    for bit when both render with one (POV_THREADS=1)
 #   OUT=out  BUILD=build  JOBS=$(nproc)
 #   RENDER_REPEATS=1 a render under 3 s is timed up to this many times (the
 #                    smallest wall time kept in its .stats; not an option of
@@ -105,6 +112,7 @@ TILES ?= 1
 FARM ?= local
 SLURM_ARGS ?=
 FARM_CPUS ?= 1
+POV_THREADS ?=
 SAMPLES ?= regular
 SEED ?= 0
 MESH_RAYS ?= 2000000
@@ -244,6 +252,9 @@ endif
 ifneq ($(shell echo '$(FARM_CPUS)' | grep -Ex '[1-9][0-9]*'),$(FARM_CPUS))
 $(error FARM_CPUS=$(FARM_CPUS): expected a positive whole number)
 endif
+ifneq ($(shell echo '$(POV_THREADS)' | grep -Ex '([1-9][0-9]*)?'),$(POV_THREADS))
+$(error POV_THREADS=$(POV_THREADS): expected a positive whole number, or nothing for POV-Ray's default)
+endif
 ifneq ($(FARM),local)
 ifneq ($(SAMPLES),regular)
 $(error FARM=$(FARM) renders regular samples only: SAMPLES=$(SAMPLES) renders in mesh bands on this machine)
@@ -284,7 +295,7 @@ dir_of = $(OUT)/$(1)$(if $(ADAPTIVE),-adaptive-r$(RAYS)-s$(SEED),$(SAMPLES_TAG))
 render_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).exr
 stats_of = $(OUT)/render/$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).stats
 render_stamp_of = $(OUT)/render/.$(1)-$(RES_TAG)-f$(FACTOR)$(SAMPLES_TAG).cmd
-render_opts_of = $(strip $(POVOPTS_$(1)) $(POVOPTS))
+render_opts_of = $(strip $(if $(POV_THREADS),+WT$(POV_THREADS)) $(POVOPTS_$(1)) $(POVOPTS))
 # Row bands: band I of TILES starts at the row `siproject --band-cuts H,TILES`
 # prints, a whole number of the engine's bands of BAND_ROWS rows (sis/bands.h,
 # kBandRows), so that each band's partial (siproject --partial) merges to the
@@ -316,7 +327,7 @@ summary_of = $(call dir_of,$(1))/summary.txt
 define band_rules
 $(call band_of,$(1),$(2)): $(SCENEDIR)/$(1).pov scenes/povray.ini $(call render_stamp_of,$(1)) | $(if $(PREBUILT),,setup)
 	@printf 'render   %-10s band %s of %s: rows %s to %s of %s x %s\n' $(1) $(2) $(TILES) $(3) $$$$(( $(4) - 1 )) $(RENDER_W) $(RENDER_H)
-	@bash scripts/render_band.sh $$< $$@ $(RENDER_W) $(RENDER_H) $(3) $(4) $(call render_opts_of,$(1))
+	@bash scripts/render_band.sh $$< $$@ $(RENDER_W) $(RENDER_H) $(3) $(4) $(if $(POV_THREADS),,+WT1) $(call render_opts_of,$(1))
 endef
 
 # Mesh bands (SAMPLES not regular): band I of MESH_BANDS holds the pattern's
@@ -772,6 +783,11 @@ CS_REF_FACTOR ?= 32
 CS_REF_ALT_FACTOR ?= 16
 endif
 CS_REF_CHECK ?= checker
+# The share of the references' samples the sampled check evaluates: at
+# factor 32 a sixteenth is 4.2 M samples, whose mean square is within a few
+# tenths of a percent of the whole set's (about sqrt(2/N) relative for errors
+# that are not concentrated in a few samples).
+CS_CHECK_SHARE ?= $(if $(QUICK),1,0.0625)
 CS_WORK ?= $(OUT)/compare-samples$(if $(QUICK),-quick)
 CS_MAKE = $(MAKE) --no-print-directory SIPROJECT=$(SIPROJECT) SIMETRICS=$(SIMETRICS) SIRAYS=$(SIRAYS) \
   OUT=$(CS_WORK) RES=$(CS_RES) ZP_NYQUIST=$(ZP_NYQUIST)
@@ -795,7 +811,7 @@ compare-samples: $(if $(PREBUILT),,build)
 	@$(PYTHON) scripts/compare_samples.py --work $(CS_WORK) --report $(OUT)/$(if $(QUICK),report-quick,report)/samples \
 	  --scenes '$(CS_SCENES)' --res $(CS_RES) --factors '$(CS_FACTORS)' --seeds '$(CS_SEEDS)' \
 	  --ref-factor $(CS_REF_FACTOR) --ref-check '$(CS_REF_CHECK)' --ref-alt-factor $(CS_REF_ALT_FACTOR) \
-	  --zp-nyquist $(ZP_NYQUIST)
+	  --check-share $(CS_CHECK_SHARE) --zp-nyquist $(ZP_NYQUIST)
 # ==== end of comparison ========================================================
 
 # ---- bench: siproject against oiiotool, splineops and the decode floor ---------
