@@ -939,3 +939,39 @@ TEST_F(Faults, CoefficientFilesOnlyWhereTheirMetadataAndSignsSurvive) {
   EXPECT_TRUE(std::any_of(back.c.data.begin(), back.c.data.end(), [](double v) { return v < 0; }));
   EXPECT_TRUE(staged(dir_).empty());
 }
+
+TEST_F(Faults, FilesAreReadByTheReaderOfTheirContent) {
+  // A file whose name says another format than its content (a PNG named
+  // .exr, an EXR named .tif) is read by the reader of its content, as
+  // OpenImageIO's own open() does; a file of the format its name says that
+  // this format's reader refuses is that reader's error, exit status 3 (not
+  // offered to every other reader: DICOM's crashed when memory ran out, as
+  // Cli.SiprojectReportsRunningOutOfMemoryAtEveryLimit found).
+  const Image img = random_image(24, 16, 7, 3);
+  write_exr(path("a.exr"), img, false);
+  fs::copy_file(path("a.exr"), path("exr-named.tif"));
+  ASSERT_EQ(run(path("a.exr") + " -o " + path("ref.exr") + " --factor 2 -q").status, 0);
+  const Result r = run(path("exr-named.tif") + " -o " + path("o.exr") + " --factor 2 -q");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(pixels(path("o.exr")), pixels(path("ref.exr")));
+  {
+    std::vector<unsigned char> v(24 * 16 * 3);
+    for (std::size_t q = 0; q < v.size(); ++q) v[q] = static_cast<unsigned char>(q * 37 % 251);
+    OIIO::ImageSpec spec(24, 16, 3, OIIO::TypeDesc::UINT8);
+    auto out = OIIO::ImageOutput::create(path("a.png"));
+    ASSERT_TRUE(out && out->open(path("a.png"), spec) &&
+                out->write_image(OIIO::TypeDesc::UINT8, v.data()) && out->close());
+  }
+  fs::copy_file(path("a.png"), path("png-named.exr"));
+  ASSERT_EQ(run(path("a.png") + " -o " + path("ref2.exr") + " --factor 2 -q").status, 0);
+  const Result p = run(path("png-named.exr") + " -o " + path("o2.exr") + " --factor 2 -q");
+  ASSERT_EQ(p.status, 0) << p.output;
+  EXPECT_EQ(pixels(path("o2.exr")), pixels(path("ref2.exr")));
+  // an EXR whose pixels are cut off: OpenEXR's reason, naming the file
+  const std::string whole = slurp(path("a.exr"));
+  put(path("cut.exr"), whole.substr(0, whole.size() - 200));
+  const Result c = run(path("cut.exr") + " -o " + path("o3.exr") + " --factor 2");
+  EXPECT_EQ(c.status, 3) << c.output;
+  EXPECT_NE(c.output.find(path("cut.exr") + ":"), std::string::npos) << c.output;
+  EXPECT_FALSE(fs::exists(path("o3.exr")));
+}

@@ -33,6 +33,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "image_input.h"
 #include "sis/coefficients.h"
 #include "sis/parallel.h"
 #include "sis/space.h"
@@ -55,6 +56,21 @@ using OIIO::ImageInput;
 using OIIO::ImageOutput;
 using OIIO::ImageSpec;
 using OIIO::TypeDesc;
+
+std::unique_ptr<ImageInput> open_input(const std::string& path, std::string* error) {
+  std::unique_ptr<ImageInput> in = ImageInput::create(path, /*do_open=*/false);
+  if (in && in->valid_file(path)) {
+    ImageSpec spec;
+    if (in->open(path, spec)) return in;
+    *error = in->geterror();
+    if (error->empty()) *error = OIIO::geterror();
+    return nullptr;
+  }
+  OIIO::geterror();  // the probe's message, if any, is not the open's
+  in = ImageInput::open(path);
+  if (!in) *error = OIIO::geterror();
+  return in;
+}
 
 struct ImageReader::Impl {
   std::unique_ptr<ImageInput> in;  // null once released
@@ -333,9 +349,9 @@ ImageReader::ImageReader(const std::string& path, const FileSignature& expected)
   const bool yc = exr_magic(path) && check_exr(path, size);
   // OpenImageIO first; a file it refuses may be a luminance-chroma OpenEXR,
   // read through OpenEXR's RGBA interface.
-  impl_->in = ImageInput::open(path);
+  std::string why;
+  impl_->in = open_input(path, &why);
   if (!impl_->in) {
-    std::string why = OIIO::geterror();
     if (!yc) {
       if (why.empty()) why = "not an image OpenImageIO can read";
       throw InputError(path + ": " + failure(why));
@@ -1350,7 +1366,8 @@ StagedFile stage(const std::string& path, const ImageSpec& spec, TypeDesc data_t
   file.close();
   // What was written reads back as what was meant: its header (every
   // format), and its pixels where the writer's own writes went unchecked.
-  auto back = ImageInput::open(file.temporary());
+  std::string back_why;
+  auto back = open_input(file.temporary(), &back_why);
   // (a format may add channels: GIF reads back as RGBA)
   bool readable = back && back->spec().width == spec.width && back->spec().height == spec.height &&
                   back->spec().nchannels >= spec.nchannels;
@@ -1365,7 +1382,7 @@ StagedFile stage(const std::string& path, const ImageSpec& spec, TypeDesc data_t
     wrote = back->spec().get_string_attribute("compression");
     if (OIIO::Strutil::iequals(wrote, compression)) wrote.clear();
   }
-  std::string back_why = back ? back->geterror() : OIIO::geterror();
+  if (back) back_why = back->geterror();
   if (back) back->close();
   if (!wrote.empty())
     throw OutputError(path + ": the " + out_format_name(path) + " writer used compression " + wrote +
@@ -1496,7 +1513,8 @@ StagedFile stage_mip_image(const std::string& path, const std::vector<Image>& le
   if (!ok) throw OutputError(path + ": " + (why.empty() ? "write failed" : why));
   file.close();
   // read back: every level there, of its size
-  auto back = ImageInput::open(file.temporary());
+  std::string back_why;
+  auto back = open_input(file.temporary(), &back_why);
   bool readable = back != nullptr;
   for (std::size_t j = 0; readable && j < levels.size(); ++j)
     readable = back->seek_subimage(0, int(j)) && back->spec().width == levels[j].width &&

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <sstream>
 
+#include "image_input.h"
 #include "sis/memory.h"
 #include "sis/projection.h"
 #include "sis/staged_file.h"
@@ -188,8 +189,9 @@ void write_partial(const std::string& path, const Partial& p) {
 Partial read_partial(const std::string& path, bool values) {
   ImageReader reader(path);
   if (!is_partial_file(reader)) throw InputError(path + ": not a partial file (no sis:partial)");
-  auto in = ImageInput::open(path);
-  if (!in) throw InputError(path + ": " + OIIO::geterror());
+  std::string why;
+  auto in = open_input(path, &why);
+  if (!in) throw InputError(path + ": " + why);
   Partial p;
   try {
     const ImageSpec sums = in->spec(0, 0);

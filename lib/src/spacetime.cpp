@@ -7,6 +7,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "image_input.h"
 #include "sis/imageio.h"
 
 namespace sis {
@@ -21,7 +22,8 @@ double subframe_time(const std::string& path) {
   {
     // a number-typed attribute (oiiotool --attrib types numbers) read as
     // its number: its text holds 6 digits only
-    auto in = OIIO::ImageInput::open(path);
+    std::string why;
+    auto in = open_input(path, &why);
     const OIIO::ParamValue* p = in ? in->spec().find_attribute("sis:time") : nullptr;
     if (p && (p->type() == OIIO::TypeDesc::FLOAT || p->type() == OIIO::TypeDesc::DOUBLE ||
               p->type() == OIIO::TypeDesc::INT)) {
