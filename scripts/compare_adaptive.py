@@ -19,8 +19,24 @@ uniform approximation ("reducible": what rays can remove). The estimators
 (sirays refine --estimates) are ranked against both by Spearman's rank
 correlation, and each chooses tiles (sirays refine's own plan, refined to
 64 rays per pixel) at budgets of 8 to 32 rays per pixel; so do both
-oracles (the same greedy plan). REPORT/adaptive.md, adaptive.csv,
-estimators.csv.
+oracles (the same greedy plan).
+
+POV-Ray's own adaptive antialiasing at the final size (POVRAY_AA: +A
+threshold, a pixel supersampled where it differs from a neighbour by more;
++AM1 a grid of R x R rays, +AM2 corners subdivided to depth R), rendered by
+make (a folder of its own per setting, WORK/pov-aa/NAME/render/), measured
+by the rays its statistics count (the pixels it traced and its
+supersamples) and its error as a box image (its pixels
+piecewise constant), against min-error cubic's best at no more rays per
+pixel (uniform or adaptive).
+
+Each row also has its displayed error: the RMS over the pixels inside the
+border of the image shown at the output size (min-error: its 2x2 display;
+POV-Ray: its pixels) against the reference's pixel averages. The zone
+plate's truth is its closed form (ZP_NYQUIST as the Makefile's), its
+per-tile and pixel references the closed form at --ref-factor points per
+pixel and axis. REPORT/adaptive.md, adaptive.csv, estimators.csv,
+adaptive.png (L2 against rays per pixel, per scene).
 
     compare_adaptive.py --work DIR --report DIR --scenes "objects edges"
         --res 128 --ref-factor 16 --seed 0 --sirays build/tools/sirays
@@ -39,10 +55,13 @@ import numpy as np
 from scipy.stats import spearmanr
 
 import siproject
-from renders import render_path  # noqa: E402  (make render's own names)
+from renders import make_render, render_path  # noqa: E402  (make render's own names)
 
 ESTIMATORS = ("halves", "contrast", "residual", "highpass")
-UNIFORM = (4, 8, 12, 16, 24, 32, 64)
+UNIFORM = (1, 2, 4, 8, 12, 16, 24, 32, 64)
+# POV-Ray's adaptive antialiasing: (method +AM, threshold +A, depth +R).
+POVRAY_AA = ((1, 0.3, 3), (1, 0.1, 4), (2, 0.3, 2), (2, 0.3, 3), (2, 0.1, 3), (2, 0.1, 4),
+             (2, 0.03, 4))
 BUDGETS = (6, 8, 12, 16, 24, 32)
 FINE = 64
 BASE = 4
@@ -62,15 +81,48 @@ def read_refinement(path):
     return [int(w) for w in words[i + 2:i + 2 + n]], int(words[words.index("rays") + 1])
 
 
+def aa_name(am, threshold, depth):
+    return f"am{am}-a{threshold:g}-r{depth}"
+
+
+def aa_label(am, threshold, depth):
+    return f"POV-Ray +AM{am} +A{threshold:g} +R{depth}"
+
+
+def zoneplate_k(a):
+    """The zone plate's chirp rate as the Makefile declares it (ZP_K)."""
+    return a.zp_nyquist * math.pi * a.res
+
+
+class ZonePlateTruth:
+    def __init__(self, k, border):
+        self.k, self.border = k, border
+
+    def l2_error(self, coefficients):
+        return siproject.l2_error(coefficients, zoneplate=self.k, border=self.border)
+
+
 class Scene:
     def __init__(self, a, scene):
         self.a, self.name = a, scene
         W = H = a.res
         self.W, self.H = W, H
         self.P = W * H
-        ref = siproject.read_image(need(render_path(a.work, scene, a.res, a.ref_factor, "regular", 0)))
-        self.ref = ref
-        self.truth = siproject.Reference(ref, border=a.border)
+        if scene == "zoneplate":
+            rf = int(a.ref_factor)
+            c = (np.arange(W * rf) + 0.5) / rf
+            u = (c / W - 0.5) ** 2
+            ref = 0.5 + 0.5 * np.cos(zoneplate_k(a) * (u[None, :] + u[:, None]))
+            self.ref = np.repeat(ref[:, :, None], 3, axis=2).astype(np.float32)
+            self.truth = ZonePlateTruth(zoneplate_k(a), a.border)
+        else:
+            ref = siproject.read_image(need(render_path(a.work, scene, a.res, a.ref_factor, "regular", 0)))
+            self.ref = ref
+            self.truth = siproject.Reference(ref, border=a.border)
+        rf = self.ref.shape[1] // W
+        self.pixel_ref = self.ref.astype(np.float64).reshape(H, rf, W, rf, -1).mean(axis=(1, 3))
+        b = int(a.border)
+        self.inside = (slice(b, H - b), slice(b, W - b))
         fine = siproject.read_image(need(render_path(a.work, scene, a.res, "8", "sobol", a.seed)))
         C = fine.shape[-1]
         self.C = C
@@ -94,6 +146,13 @@ class Scene:
         weights = np.repeat(1.0 / counts, counts)
         return siproject.coefficients(values, positions=positions, weights=weights,
                                       size=(self.W, self.H), generator="cubic", method="min-error")
+
+    def displayed(self, image):
+        """RMS of the image shown at the output size against the reference's
+        pixel averages, over the pixels inside the border, every channel."""
+        C = min(image.shape[-1], self.pixel_ref.shape[-1])
+        d = image[self.inside][..., :C].astype(np.float64) - self.pixel_ref[self.inside][..., :C]
+        return float(np.sqrt(np.mean(d ** 2)))
 
     def counts_for(self, tiles, fine=FINE):
         c = np.full(self.P, BASE, dtype=np.int64)
@@ -159,8 +218,9 @@ def measure(a):
             t = time.perf_counter()
             k = s.project(np.full(s.P, n, dtype=np.int64))
             uniform[n] = k
+            seconds = time.perf_counter() - t
             rows.append(dict(scene=scene, rays=float(n), method="uniform sobol", l2=s.truth.l2_error(k),
-                             tiles=0, seconds=time.perf_counter() - t))
+                             displayed=s.displayed(k.resample()), tiles=0, seconds=seconds))
         true = s.tile_errors(uniform[BASE])
         reducible = s.tile_errors(uniform[BASE], uniform[FINE])
         tile_pixels = [int((s.tile_of_pixel == t).sum()) for t in range(len(true))]
@@ -193,10 +253,23 @@ def measure(a):
                         tiles, rays, _, _ = sirays_refine(a, s, budget, e, work, fine)
                     counts = s.counts_for(tiles, rays)
                     k = s.project(counts)
+                    seconds = time.perf_counter() - t
                     label = "adaptive " + name + (f", {FINE} rays" if fine else ", the tool's rays")
                     rows.append(dict(scene=scene, rays=float(counts.sum()) / s.P, method=label,
-                                     l2=s.truth.l2_error(k), tiles=len(tiles), budget=budget,
-                                     refined=rays, seconds=time.perf_counter() - t))
+                                     l2=s.truth.l2_error(k), displayed=s.displayed(k.resample()),
+                                     tiles=len(tiles), budget=budget, refined=rays, seconds=seconds))
+        for am, threshold, depth in POVRAY_AA:
+            path, st, _ = make_render(os.path.join(a.work, "pov-aa", aa_name(am, threshold, depth)),
+                                      scene, a.res, 1, povopts=[f"+A{threshold:g}", f"+AM{am}", f"+R{depth}", "-J"],
+                                      zp_nyquist=a.zp_nyquist, build=a.build, quiet=True)
+            k = siproject.coefficients(path, factor=1, generator="box", method="conventional")
+            # POV-Ray's statistics: the pixels it traced (a few more than the
+            # frame's with antialiasing on) and its supersamples beyond them
+            rays = (float(st["pixels"]) + float(st.get("samples", 0))) / s.P
+            rows.append(dict(scene=scene, rays=rays,
+                             method=aa_label(am, threshold, depth), l2=s.truth.l2_error(k),
+                             displayed=s.displayed(siproject.read_image(path)), tiles=0,
+                             seconds=float(st.get("wall_s", math.nan))))
         print(f"compare_adaptive.py: {scene} done", file=sys.stderr)
     return rows, est_rows, notes
 
@@ -204,7 +277,8 @@ def measure(a):
 def write(a, rows, est_rows, notes, pipeline):
     os.makedirs(a.report, exist_ok=True)
     with open(os.path.join(a.report, "adaptive.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=["scene", "method", "budget", "rays", "tiles", "refined", "l2", "seconds"],
+        w = csv.DictWriter(f, fieldnames=["scene", "method", "budget", "rays", "tiles", "refined", "l2",
+                                          "displayed", "seconds"],
                            extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
@@ -237,10 +311,35 @@ def write(a, rows, est_rows, notes, pipeline):
               "| method | budget | rays per pixel | tiles refined | to rays per pixel | L2 | / uniform 64 | excess left |",
               "| --- | --- | --- | --- | --- | --- | --- | --- |"]
         for r in sr:
+            if r["method"].startswith("POV-Ray"):
+                continue
             L.append(f"| {r['method']} | {r.get('budget', '')} | {r['rays']:.3f} | {r['tiles']} | {r.get('refined', '')} | "
                      f"{r['l2']:.6f} | {r['l2'] / u64:.4f} | {(r['l2'] - u64) / (u[4.0] - u64):.3f} |")
+        L += ["", "### Against POV-Ray's adaptive antialiasing", "",
+              "Each POV-Ray setting (its rays per pixel from its statistics; its L2 error as a box image, "
+              "its displayed error its pixels') against min-error cubic at equal rays: uniform sobol's L2 "
+              "error at exactly those rays per pixel (interpolated between the measured densities, "
+              "linearly in log rays and log error), and the lowest L2 error measured at no more rays per "
+              "pixel (uniform sobol or adaptive with the tool's rays) with that row's displayed error.", "",
+              "| POV-Ray | rays per pixel | L2 | displayed | min-error uniform at those rays: L2 | "
+              "lower | lowest measured at <= those rays | its rays | L2 | displayed |",
+              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+        mine = [r for r in sr if r["method"] == "uniform sobol" or r["method"].endswith("the tool's rays")]
+        curve = sorted((r["rays"], r["l2"]) for r in sr if r["method"] == "uniform sobol")
+        wins = []
+        for r in [r for r in sr if r["method"].startswith("POV-Ray")]:
+            at = math.exp(np.interp(math.log(r["rays"]), [math.log(x) for x, _ in curve],
+                                    [math.log(y) for _, y in curve]))
+            wins.append(at < r["l2"])
+            best = min((m for m in mine if m["rays"] <= r["rays"] + 1e-9), key=lambda m: m["l2"], default=None)
+            tail = (f"{best['method']} | {best['rays']:.3f} | {best['l2']:.6f} | {best['displayed']:.6f}"
+                    if best else "none (fewer rays than any) | | |")
+            L.append(f"| {r['method']} | {r['rays']:.3f} | {r['l2']:.6f} | {r['displayed']:.6f} | "
+                     f"{at:.6f} | {'yes' if wins[-1] else 'no'} | {tail} |")
+        L.append(f"- min-error cubic's L2 error at equal rays is lower than POV-Ray's in {sum(wins)} of "
+                 f"{len(wins)} settings")
         limit = goal.get(scene, 16)
-        for m in sorted({r["method"] for r in sr}):
+        for m in sorted({r["method"] for r in sr if not r["method"].startswith("POV-Ray")}):
             met = [r for r in sr if r["method"] == m and r["rays"] <= limit + 1e-9 and r["l2"] <= 1.02 * u64]
             best = min((r for r in sr if r["method"] == m and r["rays"] <= limit + 1e-9),
                        key=lambda r: r["l2"], default=None)
@@ -253,7 +352,44 @@ def write(a, rows, est_rows, notes, pipeline):
         L += ["## make SAMPLES=adaptive (the real second pass)", ""] + pipeline + [""]
     with open(os.path.join(a.report, "adaptive.md"), "w") as f:
         f.write("\n".join(L))
+    chart(a, rows)
     print("\n".join(L))
+
+
+def chart(a, rows):
+    """adaptive.png: the continuous L2 error (top) and the displayed error
+    (bottom) against rays per pixel, a column per scene: uniform sobol,
+    adaptive (residual, the tool's rays) and POV-Ray's settings."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    scenes = a.scenes.split()
+    fig, axes = plt.subplots(2, len(scenes), figsize=(4.2 * len(scenes), 6.6), squeeze=False)
+    for col, scene in enumerate(scenes):
+        sr = [r for r in rows if r["scene"] == scene]
+        for row, key in enumerate(("l2", "displayed")):
+            ax = axes[row][col]
+            for label, pick, style in (
+                    ("uniform sobol (min-error cubic)", lambda r: r["method"] == "uniform sobol", "o-"),
+                    ("adaptive (min-error cubic)",
+                     lambda r: r["method"] == "adaptive residual, the tool's rays", "s-"),
+                    ("POV-Ray +AM (its pixels)", lambda r: r["method"].startswith("POV-Ray"), "^")):
+                pts = sorted((r["rays"], r[key]) for r in sr if pick(r))
+                if pts:
+                    ax.plot(*zip(*pts), style, label=label, markersize=4)
+            ax.set_xscale("log", base=2)
+            ax.set_yscale("log")
+            ax.grid(True, which="both", alpha=0.3)
+            if row == 0:
+                ax.set_title(scene)
+            else:
+                ax.set_xlabel("rays per pixel")
+    axes[0][0].set_ylabel("continuous L2 error")
+    axes[1][0].set_ylabel("displayed error (pixel averages)")
+    axes[0][0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(a.report, "adaptive.png"), dpi=80)
+    plt.close(fig)
 
 
 def stats(path):
@@ -282,8 +418,13 @@ def pipeline_rows(a):
                             "--generator", "cubic", "--method", "min-error", "--coeffs",
                             os.path.join(t, "k.exr"), "-o", os.path.join(t, "o.exr"), "-q"], check=True)
             k = siproject.load(os.path.join(t, "k.exr"))
-        ref = siproject.read_image(render_path(a.work, scene, a.res, a.ref_factor, "regular", 0))
-        l2 = siproject.Reference(ref, border=a.border).l2_error(k)
+        if scene == "zoneplate":
+            truth = ZonePlateTruth(zoneplate_k(a), a.border)
+        else:
+            truth = siproject.Reference(
+                siproject.read_image(render_path(a.work, scene, a.res, a.ref_factor, "regular", 0)),
+                border=a.border)
+        l2 = truth.l2_error(k)
         words = open(name + ".refine.txt").read().split()
         rays, tiles = int(words[words.index("rays") + 1]), int(words[words.index("tiles") + 1])
         b = stats(render_path(a.work, scene, a.res, "2", "sobol", a.seed).replace(".exr", ".stats"))
@@ -312,7 +453,9 @@ def main():
     p.add_argument("--border", type=float, default=2.0)
     p.add_argument("--sirays", default="build/tools/sirays")
     p.add_argument("--siproject", default="build/tools/siproject")
+    p.add_argument("--zp-nyquist", type=float, default=0.7)
     a = p.parse_args()
+    a.build = os.path.dirname(os.path.dirname(os.path.abspath(a.siproject)))
     rows, est_rows, notes = measure(a)
     write(a, rows, est_rows, notes, pipeline_rows(a))
 
