@@ -847,6 +847,15 @@ docs:
 	  $(PYTHON) scripts/readme_section.py docs/performance.md performance $(OUT)/bench/bench.md 2 && \
 	  echo "docs: docs/performance.md table from $(OUT)/bench/bench.md"; \
 	else echo "docs: no $(OUT)/bench/bench.md (run make bench): table left as it is"; fi
+	@if [ -f $(OUT)/report/samples/samples.png ]; then \
+	  cp $(OUT)/report/samples/samples.png docs/img/samples.png && \
+	  cp $(OUT)/report/samples/samples-time.png docs/img/samples-time.png && \
+	  echo "docs: docs/img/samples.png and samples-time.png from $(OUT)/report/samples (the numbers in docs/studies.md are written by hand)"; \
+	else echo "docs: no $(OUT)/report/samples (run make compare-samples): charts left as they are"; fi
+	@if [ -f $(OUT)/report/adaptive/adaptive.png ]; then \
+	  cp $(OUT)/report/adaptive/adaptive.png docs/img/adaptive.png && \
+	  echo "docs: docs/img/adaptive.png from $(OUT)/report/adaptive (the numbers in docs/studies.md are written by hand)"; \
+	else echo "docs: no $(OUT)/report/adaptive (run make compare-adaptive): chart left as it is"; fi
 	@if [ -f $(OUT)/report/anim/psnr-vs-k.png ]; then \
 	  cp $(OUT)/report/anim/psnr-vs-k.png docs/img/anim-psnr-vs-k.png && \
 	  echo "docs: docs/img/anim-psnr-vs-k.png from $(OUT)/report/anim (the numbers in docs/studies.md are written by hand)"; \

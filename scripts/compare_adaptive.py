@@ -32,7 +32,8 @@ pixel (uniform or adaptive).
 
 Each row also has its displayed error: the RMS over the pixels inside the
 border of the image shown at the output size (min-error: its 2x2 display;
-POV-Ray: its pixels) against the reference's pixel averages. The zone
+POV-Ray: its pixels), and for min-error its pixel display too (the exact
+pixel averages of f_app), against the reference's pixel averages. The zone
 plate's truth is its closed form (ZP_NYQUIST as the Makefile's), its
 per-tile and pixel references the closed form at --ref-factor points per
 pixel and axis. REPORT/adaptive.md, adaptive.csv, estimators.csv,
@@ -220,7 +221,9 @@ def measure(a):
             uniform[n] = k
             seconds = time.perf_counter() - t
             rows.append(dict(scene=scene, rays=float(n), method="uniform sobol", l2=s.truth.l2_error(k),
-                             displayed=s.displayed(k.resample()), tiles=0, seconds=seconds))
+                             displayed=s.displayed(k.resample()),
+                             displayed_pixel=s.displayed(k.resample(display="pixel")), tiles=0,
+                             seconds=seconds))
         true = s.tile_errors(uniform[BASE])
         reducible = s.tile_errors(uniform[BASE], uniform[FINE])
         tile_pixels = [int((s.tile_of_pixel == t).sum()) for t in range(len(true))]
@@ -257,6 +260,7 @@ def measure(a):
                     label = "adaptive " + name + (f", {FINE} rays" if fine else ", the tool's rays")
                     rows.append(dict(scene=scene, rays=float(counts.sum()) / s.P, method=label,
                                      l2=s.truth.l2_error(k), displayed=s.displayed(k.resample()),
+                                     displayed_pixel=s.displayed(k.resample(display="pixel")),
                                      tiles=len(tiles), budget=budget, refined=rays, seconds=seconds))
         for am, threshold, depth in POVRAY_AA:
             path, st, _ = make_render(os.path.join(a.work, "pov-aa", aa_name(am, threshold, depth)),
@@ -268,7 +272,7 @@ def measure(a):
             rays = (float(st["pixels"]) + float(st.get("samples", 0))) / s.P
             rows.append(dict(scene=scene, rays=rays,
                              method=aa_label(am, threshold, depth), l2=s.truth.l2_error(k),
-                             displayed=s.displayed(siproject.read_image(path)), tiles=0,
+                             displayed=s.displayed(siproject.read_image(path)), displayed_pixel=math.nan, tiles=0,
                              seconds=float(st.get("wall_s", math.nan))))
         print(f"compare_adaptive.py: {scene} done", file=sys.stderr)
     return rows, est_rows, notes
@@ -278,7 +282,7 @@ def write(a, rows, est_rows, notes, pipeline):
     os.makedirs(a.report, exist_ok=True)
     with open(os.path.join(a.report, "adaptive.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=["scene", "method", "budget", "rays", "tiles", "refined", "l2",
-                                          "displayed", "seconds"],
+                                          "displayed", "displayed_pixel", "seconds"],
                            extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
@@ -320,10 +324,13 @@ def write(a, rows, est_rows, notes, pipeline):
               "its displayed error its pixels') against min-error cubic at equal rays: uniform sobol's L2 "
               "error at exactly those rays per pixel (interpolated between the measured densities, "
               "linearly in log rays and log error), and the lowest L2 error measured at no more rays per "
-              "pixel (uniform sobol or adaptive with the tool's rays) with that row's displayed error.", "",
+              "pixel (uniform sobol or adaptive with the tool's rays) with that row's displayed errors: its "
+              "2x2 display (siproject's default) and its pixel display (the exact pixel averages of "
+              "f_app).", "",
               "| POV-Ray | rays per pixel | L2 | displayed | min-error uniform at those rays: L2 | "
-              "lower | lowest measured at <= those rays | its rays | L2 | displayed |",
-              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+              "lower | lowest measured at <= those rays | its rays | L2 | displayed (2x2) | "
+              "displayed (pixel) |",
+              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
         mine = [r for r in sr if r["method"] == "uniform sobol" or r["method"].endswith("the tool's rays")]
         curve = sorted((r["rays"], r["l2"]) for r in sr if r["method"] == "uniform sobol")
         wins = []
@@ -332,8 +339,8 @@ def write(a, rows, est_rows, notes, pipeline):
                                     [math.log(y) for _, y in curve]))
             wins.append(at < r["l2"])
             best = min((m for m in mine if m["rays"] <= r["rays"] + 1e-9), key=lambda m: m["l2"], default=None)
-            tail = (f"{best['method']} | {best['rays']:.3f} | {best['l2']:.6f} | {best['displayed']:.6f}"
-                    if best else "none (fewer rays than any) | | |")
+            tail = (f"{best['method']} | {best['rays']:.3f} | {best['l2']:.6f} | {best['displayed']:.6f} | "
+                    f"{best['displayed_pixel']:.6f}" if best else "none (fewer rays than any) | | | |")
             L.append(f"| {r['method']} | {r['rays']:.3f} | {r['l2']:.6f} | {r['displayed']:.6f} | "
                      f"{at:.6f} | {'yes' if wins[-1] else 'no'} | {tail} |")
         L.append(f"- min-error cubic's L2 error at equal rays is lower than POV-Ray's in {sum(wins)} of "
@@ -377,6 +384,12 @@ def chart(a, rows):
                 pts = sorted((r["rays"], r[key]) for r in sr if pick(r))
                 if pts:
                     ax.plot(*zip(*pts), style, label=label, markersize=4)
+            if key == "displayed":
+                pts = sorted((r["rays"], r["displayed_pixel"]) for r in sr
+                             if r["method"] == "uniform sobol")
+                ax.plot(*zip(*pts), "o--", color="C0", alpha=0.6, markersize=3,
+                        label="uniform sobol, pixel display")
+                ax.legend(fontsize=7) if col == 0 else None
             ax.set_xscale("log", base=2)
             ax.set_yscale("log")
             ax.grid(True, which="both", alpha=0.3)
