@@ -215,20 +215,38 @@ void HexAcquisition::interpolate(long y0, long y1, const T* rows, std::vector<T>
   const std::vector<long>& colmap = plan_.column_source();
   const std::size_t orow = std::size_t(g.columns) * C;
   out.resize(orow * (y1 - y0));
-  parallel_for(y1 - y0, threads, [&](long r0, long r1) {
-    for (long r = r0; r < r1; ++r) {
-      const T* in = rows + std::size_t(r) * win * C;
-      T* o = out.data() + orow * r;
-      for (long m = 0; m < g.columns; ++m) {
-        const long* q = colmap.data() + g.x_first[m];
-        const auto& w = g.x_weight[m];
-        for (int c = 0; c < C; ++c)
-          o[std::size_t(m) * C + c] =
-              static_cast<T>(w[0] * in[q[0] * C + c] + w[1] * in[q[1] * C + c] +
-                             w[2] * in[q[2] * C + c] + w[3] * in[q[3] * C + c]);
+  // A column's 4 taps are 4 neighbouring input columns but near the edges,
+  // where the boundary rule folds them: there they are gathered one by one.
+  auto rows_of = [&](auto channels) {
+    constexpr int CC = decltype(channels)::value;
+    const int Cn = CC > 0 ? CC : C;
+    parallel_for(y1 - y0, threads, [&](long r0, long r1) {
+      for (long r = r0; r < r1; ++r) {
+        const T* in = rows + std::size_t(r) * win * Cn;
+        T* o = out.data() + orow * r;
+        for (long m = 0; m < g.columns; ++m, o += Cn) {
+          const long* q = colmap.data() + g.x_first[m];
+          const auto& w = g.x_weight[m];
+          if (q[1] == q[0] + 1 && q[2] == q[0] + 2 && q[3] == q[0] + 3) {
+            const T* p = in + q[0] * Cn;
+            for (int c = 0; c < Cn; ++c)
+              o[c] = static_cast<T>(w[0] * p[c] + w[1] * p[Cn + c] + w[2] * p[2 * Cn + c] +
+                                    w[3] * p[3 * Cn + c]);
+          } else {
+            for (int c = 0; c < Cn; ++c)
+              o[c] = static_cast<T>(w[0] * in[q[0] * Cn + c] + w[1] * in[q[1] * Cn + c] +
+                                    w[2] * in[q[2] * Cn + c] + w[3] * in[q[3] * Cn + c]);
+          }
+        }
       }
-    }
-  });
+    });
+  };
+  switch (C) {
+    case 1: rows_of(std::integral_constant<int, 1>()); break;
+    case 3: rows_of(std::integral_constant<int, 3>()); break;
+    case 4: rows_of(std::integral_constant<int, 4>()); break;
+    default: rows_of(std::integral_constant<int, 0>()); break;
+  }
 }
 
 std::size_t HexAcquisition::strip_row_size() const {
@@ -256,6 +274,41 @@ void aligned_terms(const double* u, int n, const S* src, double* a, int C) {
   }
   if constexpr (CC > 0)
     for (int c = 0; c < CC; ++c) a[c] = sum[c];
+}
+
+// aligned_terms for four lattice points of a row at once (coefficients a,
+// a + CC, a + 2 CC, a + 3 CC; their strips `stride` values apart): each
+// point's sums in the same order as aligned_terms, so the same bits, with
+// the four points' additions interleaved so that they do not wait on each
+// other.
+template <int CC, typename S>
+void aligned_terms4(const double* u, int n, const S* src, std::size_t stride, double* a) {
+  double s0[CC], s1[CC], s2[CC], s3[CC];
+  for (int c = 0; c < CC; ++c) {
+    s0[c] = a[c];
+    s1[c] = a[CC + c];
+    s2[c] = a[2 * CC + c];
+    s3[c] = a[3 * CC + c];
+  }
+  const S* p0 = src;
+  const S* p1 = src + stride;
+  const S* p2 = src + 2 * stride;
+  const S* p3 = src + 3 * stride;
+  for (int t = 0; t < n; ++t, p0 += CC, p1 += CC, p2 += CC, p3 += CC) {
+    const double w = u[t];
+    for (int c = 0; c < CC; ++c) {
+      s0[c] += w * p0[c];
+      s1[c] += w * p1[c];
+      s2[c] += w * p2[c];
+      s3[c] += w * p3[c];
+    }
+  }
+  for (int c = 0; c < CC; ++c) {
+    a[c] = s0[c];
+    a[CC + c] = s1[c];
+    a[2 * CC + c] = s2[c];
+    a[3 * CC + c] = s3[c];
+  }
 }
 
 }  // namespace
@@ -298,7 +351,13 @@ void HexAcquisition::accumulate(const S* strip, long y0, long y1, const std::vec
               hi = std::max(hi, g.last[row]);
             }
             if (hi < lo) continue;
-            for (long i = 0; i < Q; ++i)
+            long i = 0;
+            if constexpr (CC > 0)
+              for (; i + 4 <= Q; i += 4)
+                aligned_terms4<CC>(u.data() + lo, hi - lo + 1,
+                                   hk + std::size_t(g.s1 * i + shift + lo) * Cn,
+                                   std::size_t(g.s1) * Cn, acc + std::size_t(i) * Cn);
+            for (; i < Q; ++i)
               aligned_terms<CC>(u.data() + lo, hi - lo + 1,
                                 hk + std::size_t(g.s1 * i + shift + lo) * Cn,
                                 acc + std::size_t(i) * Cn, Cn);
