@@ -738,7 +738,8 @@ compare-hex: $(if $(PREBUILT),,build)
 # make compare-mip [QUICK=1]: pyramids against maketx (scripts/compare_mip.py):
 # objects, zoneplate and checker from a render at factor 8 of a 1024 x 1024
 # frame, levels 0 to 5 by siproject (box, tent, cubic; centred and 2x2)
-# against maketx's levels of the same render (box, lanczos3): continuous L2
+# against maketx's levels of the same render (box, lanczos3, lanczos3
+# --hicomp): continuous L2
 # error against the truth (factor 32, the zone plate's closed form), the
 # displayed level against the truth's area averages, negative samples, time
 # and peak memory of the whole pyramid. $(OUT)/report/mip/ (QUICK:

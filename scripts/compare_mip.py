@@ -4,8 +4,10 @@
 For each scene, from one render at --factor of a --res frame: the levels
 0..L-1 by siproject (min-error box, tent, cubic: the levels `siproject --mip`
 writes, bit for bit; tests/test_mip.cpp) against maketx's levels of the same
-render (its default box filter and --filter lanczos3; maketx's level
-log2(factor) + j has level j's size).
+render (its default box filter, --filter lanczos3, and lanczos3 with
+--hicomp, its highlight compensation: the range compressed before the
+filter and expanded after; maketx's level log2(factor) + j has level j's
+size).
 
 Measures per level:
   l2       continuous L2 error (RMS over the frame; the zone plate at 8 * 2^j
@@ -108,8 +110,9 @@ def main():
                     else siproject.l2_error(k, ref))
 
         tx = {}
-        for name, extra in (("maketx box", []), ("maketx lanczos3", ["--filter", "lanczos3"])):
-            out = os.path.join(args.work, f"{scene}-{name.split()[1]}.tx.exr")
+        for name, extra in (("maketx box", []), ("maketx lanczos3", ["--filter", "lanczos3"]),
+                            ("maketx lanczos3 --hicomp", ["--filter", "lanczos3", "--hicomp"])):
+            out = os.path.join(args.work, f"{scene}-{'-'.join(name.split()[1:]).strip('-')}.tx.exr")
             run([args.maketx, src, "-o", out] + extra, stdout=subprocess.DEVNULL)
             tx[name] = out
         rows = {}
@@ -137,7 +140,9 @@ def main():
                           ("siproject --mip --generator box --display centred",
                            [args.siproject, src, "-o", mip, "--factor", str(F), "--mip", "-q", "--generator", "box", "--display", "centred"]),
                           ("maketx", [args.maketx, src, "-o", tx["maketx box"]]),
-                          ("maketx --filter lanczos3", [args.maketx, src, "-o", tx["maketx lanczos3"], "--filter", "lanczos3"])):
+                          ("maketx --filter lanczos3", [args.maketx, src, "-o", tx["maketx lanczos3"], "--filter", "lanczos3"]),
+                          ("maketx --filter lanczos3 --hicomp",
+                           [args.maketx, src, "-o", tx["maketx lanczos3 --hicomp"], "--filter", "lanczos3", "--hicomp"])):
             runs = [timed(cmd) for _ in range(args.repeat)]
             timing[name] = {"seconds": statistics.median(r[0] for r in runs),
                             "peak_mib": statistics.median(r[1] for r in runs), "command": " ".join(cmd)}
@@ -165,13 +170,16 @@ def write_md(res, path):
                 L.append(f"| {n} | " + " | ".join(f"{s['levels'][j][n][key]:.5f}" for j in range(len(res["levels"]))) + " |")
             L.append("")
         L.append("Goal checks (continuous L2, dB = 20 log10(other / cubic); cubic is `siproject cubic`'s coefficients):\n")
-        L.append("| level | cubic vs maketx box (dB) | cubic vs maketx lanczos3 (dB) | >= 1 dB vs box | better than lanczos3 |")
-        L.append("| --- | --- | --- | --- | --- |")
+        L.append("| level | cubic vs maketx box (dB) | cubic vs maketx lanczos3 (dB) | "
+                 "cubic vs lanczos3 --hicomp (dB) | >= 1 dB vs box | better than lanczos3 |")
+        L.append("| --- | --- | --- | --- | --- | --- |")
         for j in range(len(res["levels"])):
             r = s["levels"][j]
             c = r["siproject cubic 2x2"]["l2"]
             a, b = db(c, r["maketx box"]["l2"]), db(c, r["maketx lanczos3"]["l2"])
-            L.append(f"| {j} | {a:+.2f} | {b:+.2f} | {'yes' if a >= 1 else 'no'} | {'yes' if b > 0 else 'no'} |")
+            hc = db(c, r["maketx lanczos3 --hicomp"]["l2"])
+            L.append(f"| {j} | {a:+.2f} | {b:+.2f} | {hc:+.2f} | {'yes' if a >= 1 else 'no'} | "
+                     f"{'yes' if b > 0 else 'no'} |")
         L.append("")
         L.append("Negative samples in the displayed levels (all levels): " + ", ".join(
             f"{n} {sum(s['levels'][j][n]['negative'] for j in range(len(res['levels'])))}" for n in names) + "\n")
