@@ -57,9 +57,20 @@ using OIIO::ImageOutput;
 using OIIO::ImageSpec;
 using OIIO::TypeDesc;
 
+namespace {
+// The readers of OpenImageIO 2.4 whose valid_file() reads the file's magic
+// number; the others' open the file, offering it to every reader in turn.
+bool checks_magic(const std::string& format) {
+  static const char* const names[] = {"openexr", "tiff", "png", "jpeg", "bmp", "dpx", "fits", "sgi"};
+  for (const char* n : names)
+    if (format == n) return true;
+  return false;
+}
+}  // namespace
+
 std::unique_ptr<ImageInput> open_input(const std::string& path, std::string* error) {
   std::unique_ptr<ImageInput> in = ImageInput::create(path, /*do_open=*/false);
-  if (in && in->valid_file(path)) {
+  if (in && checks_magic(in->format_name()) && in->valid_file(path)) {
     ImageSpec spec;
     if (in->open(path, spec)) return in;
     *error = in->geterror();
@@ -1523,7 +1534,8 @@ StagedFile stage_mip_image(const std::string& path, const std::vector<Image>& le
   if (back) back->close();
   if (!readable)
     throw OutputError(path + ": the OpenEXR writer made a MIP-map that does not read back as its " +
-                      std::to_string(levels.size()) + " levels; nothing written");
+                      std::to_string(levels.size()) + " levels" +
+                      (back_why.empty() ? "" : " (" + back_why + ")") + "; nothing written");
   return file;
 }
 
