@@ -8,6 +8,7 @@
 
 #include "sis/parallel.h"
 #include "sis/weights.h"
+#include "value_width.h"
 
 namespace sis {
 
@@ -241,12 +242,7 @@ void HexAcquisition::interpolate(long y0, long y1, const T* rows, std::vector<T>
       }
     });
   };
-  switch (C) {
-    case 1: rows_of(std::integral_constant<int, 1>()); break;
-    case 3: rows_of(std::integral_constant<int, 3>()); break;
-    case 4: rows_of(std::integral_constant<int, 4>()); break;
-    default: rows_of(std::integral_constant<int, 0>()); break;
-  }
+  with_width(C, rows_of);
 }
 
 std::size_t HexAcquisition::strip_row_size() const {
@@ -366,12 +362,7 @@ void HexAcquisition::accumulate(const S* strip, long y0, long y1, const std::vec
       }
     });
   };
-  switch (C) {
-    case 1: rows_into(std::integral_constant<int, 1>()); break;
-    case 3: rows_into(std::integral_constant<int, 3>()); break;
-    case 4: rows_into(std::integral_constant<int, 4>()); break;
-    default: rows_into(std::integral_constant<int, 0>()); break;
-  }
+  with_width(C, rows_into);
 }
 
 void HexAcquisition::add_rows(long y0, long y1, const float* rows) { add_in_order(y0, y1, rows); }

@@ -1393,8 +1393,10 @@ StagedFile stage(const std::string& path, const ImageSpec& spec, TypeDesc data_t
     wrote = back->spec().get_string_attribute("compression");
     if (OIIO::Strutil::iequals(wrote, compression)) wrote.clear();
   }
-  if (back) back_why = back->geterror();
-  if (back) back->close();
+  if (back) {
+    back_why = back->geterror();
+    back->close();
+  }
   if (!wrote.empty())
     throw OutputError(path + ": the " + out_format_name(path) + " writer used compression " + wrote +
                       ", not " + compression + "; nothing written");

@@ -1,6 +1,6 @@
 #pragma once
-// The scattered passes' dispatch on the values a coefficient holds (a
-// sample's channels, and the weight sum where the rule keeps one): the
+// The dispatch on the values a coefficient holds (a sample's channels, and
+// in the scattered passes the weight sum where the rule keeps one): the
 // count as a compile-time constant for 1 to 5, so that the inner loops are
 // unrolled, else 0 (any count, at run time).
 #include <type_traits>
