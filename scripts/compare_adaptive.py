@@ -56,7 +56,7 @@ import numpy as np
 from scipy.stats import spearmanr
 
 import siproject
-from renders import make_render, render_path  # noqa: E402  (make render's own names)
+from renders import make_render, render_path, zp_k  # noqa: E402  (make render's own names)
 
 ESTIMATORS = ("halves", "contrast", "residual", "highpass")
 UNIFORM = (1, 2, 4, 8, 12, 16, 24, 32, 64)
@@ -91,8 +91,7 @@ def aa_label(am, threshold, depth):
 
 
 def zoneplate_k(a):
-    """The zone plate's chirp rate as the Makefile declares it (ZP_K, %.6f)."""
-    return float(f"{a.zp_nyquist * math.pi * a.res:.6f}")
+    return zp_k(a.res, a.zp_nyquist)
 
 
 class ZonePlateTruth:

@@ -36,6 +36,7 @@ import sys
 import numpy as np
 
 import siproject
+from renders import zp_k  # noqa: E402  (the Makefile's ZP_K)
 
 
 def run(cmd, **kw):
@@ -63,10 +64,6 @@ def sizes(w, h):
         w, h = max(1, w // 2), max(1, h // 2)
         out.append((w, h))
     return out
-
-
-def zp_k(res, nyquist=0.7):
-    return float(f"{nyquist * math.pi * res:.6f}")  # as the Makefile declares it
 
 
 def db(a, b):

@@ -12,6 +12,7 @@ it: wall_s, wall_runs, parse_s, trace_s, pixels, samples; for a pattern's
 render the sums over its mesh bands, with rays, mesh_s, mesh_bytes and
 bands) and whether make rendered it now.
 """
+import math
 import os
 import subprocess
 
@@ -33,6 +34,12 @@ def render_path(out, scene, res, factor, samples="regular", seed=0):
     """OUT/render/SCENE-RES-fFACTOR[-SAMPLES-sSEED].exr, FACTOR as given to make."""
     tag = "" if samples == "regular" else f"-{samples}-s{seed}"
     return os.path.join(out, "render", f"{scene}-{res_tag(res)}-f{factor}{tag}.exr")
+
+
+def zp_k(res, nyquist=0.7):
+    """The zone plate's chirp rate for a frame RES pixels wide, as the
+    Makefile declares it (ZP_K: NYQUIST * pi * RES, 6 decimals)."""
+    return float(f"{nyquist * math.pi * res:.6f}")
 
 
 def stats_path(render):
