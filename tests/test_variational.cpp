@@ -292,6 +292,38 @@ TEST(Variational, GcvPicksALargerLambdaForNoisierSamples) {
   EXPECT_GT(rn.lambda, rc.lambda);
 }
 
+// GCV's search runs from the largest lambda down and stops after two rises
+// of the score past its lowest; its warm-started solve at the chosen lambda
+// equals a solve from zero at that lambda given.
+TEST(Variational, GcvStopsPastTheMinimumAndItsFitEqualsTheGivenLambdas) {
+  const ScatteredTarget t = target(16, 12, 3, Boundary::Mirror);
+  ScatteredSamples noisy = test::jittered(16, 12, 1, 3);
+  std::mt19937_64 g(8);
+  for (double& v : noisy.values) v += 0.3 * (uniform(g) - 0.5);
+  ScatteredReport r;
+  const Coefficients chosen = project_scattered(noisy, t, variational({}), &r);
+  ASSERT_GE(r.gcv.size(), 3u);
+  ASSERT_LT(r.gcv.size(), 15u);  // stopped before the smallest lambda
+  for (std::size_t i = 1; i < r.gcv.size(); ++i) EXPECT_LT(r.gcv[i].first, r.gcv[i - 1].first);
+  const std::size_t n = r.gcv.size();
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < n; ++i)
+    if (r.gcv[i].second < r.gcv[best].second) best = i;
+  EXPECT_EQ(best, n - 3);
+  EXPECT_EQ(r.lambda, r.gcv[best].first);
+  EXPECT_GE(r.gcv[n - 2].second, r.gcv[best].second);
+  EXPECT_GE(r.gcv[n - 1].second, r.gcv[best].second);
+  const Coefficients given = project_scattered(noisy, t, variational(r.lambda));
+  double m = 0, scale = 0;
+  for (std::size_t e = 0; e < given.c.data.size(); ++e) {
+    m = std::max(m, std::abs(chosen.c.data[e] - given.c.data[e]));
+    scale = std::max(scale, std::abs(given.c.data[e]));
+  }
+  // Both stop at a residual of 1e-9 ||b||; the warm start only changes
+  // where inside that ball.
+  EXPECT_LT(m, 1e-7 * scale);
+}
+
 void expect_error(const ScatteredSamples& s, const ScatteredTarget& t, const ScatteredOptions& o,
                   const std::string& needle) {
   test::expect_error([&] { project_scattered(s, t, o); }, needle);

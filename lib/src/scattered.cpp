@@ -946,6 +946,20 @@ Coefficients ScatteredAcquisition::finish(ScatteredRule rule) const {
   return k;
 }
 
+namespace {
+
+// The variational rule's working set for n coefficients, N samples, C
+// channels and P probes (A = C + P channels solved together): the samples'
+// copy (positions, weights, values), f_app at them, the splatted sums (A + 1),
+// b, the CG's r, z, p, q, R v, x and the best x (A each), the
+// preconditioner's transform and inverse.
+std::uint64_t variational_bytes(std::uint64_t n, long N, int C, int P) {
+  const std::uint64_t A = std::uint64_t(C + P);
+  return 8 * (n * (9 * A + 1 + 2) + std::uint64_t(N) * (3 + 2 * A));
+}
+
+}  // namespace
+
 std::pair<long, long> scattered_grid(const ScatteredTarget& target) {
   if (is_hexagonal(target)) {
     const detail::HexScatteredGrid g = detail::hex_scattered_grid(target);
@@ -955,9 +969,13 @@ std::pair<long, long> scattered_grid(const ScatteredTarget& target) {
   return {g.nx, g.ny};
 }
 
-std::uint64_t scattered_bytes(const ScatteredTarget& target, const ScatteredSamples& samples) {
+std::uint64_t scattered_bytes(const ScatteredTarget& target, const ScatteredSamples& samples,
+                              const ScatteredOptions& options) {
   const auto [nx, ny] = scattered_grid(target);
   const int C = samples.channels;
+  if (options.rule == ScatteredRule::Variational && !is_hexagonal(target))
+    return variational_bytes(std::uint64_t(nx) * std::uint64_t(ny), samples.count(), C,
+                             options.lambda ? 0 : options.gcv_probes);
   const std::uint64_t grid = std::uint64_t(nx) * std::uint64_t(ny) * C;
   // Cartesian: the sums, the fit's four grids and r, values per sample.
   // Hexagonal: one grid more (b), values per image in the grid's period
@@ -1203,6 +1221,7 @@ Coefficients project_variational(const ScatteredSamples& samples, const Scattere
   cg.tolerance = options.variational_tolerance;
   double wsum = 0;
   for (long i = 0; i < N; ++i) wsum += s.weights[i];
+  // x is the starting point (zero, or the previous lambda's solution).
   auto solve = [&](double lambda, Grid<double>& x) {
     Grid<double> rc(g.nx, g.ny, A);
     auto apply = [&](const Grid<double>& v, Grid<double>& out) {
@@ -1216,7 +1235,6 @@ Coefficients project_variational(const ScatteredSamples& samples, const Scattere
       }
     };
     const SpectralPreconditioner pre(g.nx, g.ny, target.boundary, a, area, R, lambda);
-    std::fill(x.data.begin(), x.data.end(), 0.0);
     ScatteredReport r;
     conjugate_gradients(x, b, apply, pre, cg, r);
     rep.iterations += r.iterations;
@@ -1230,8 +1248,13 @@ Coefficients project_variational(const ScatteredSamples& samples, const Scattere
     best = std::move(x);
   } else {
     const double h = std::max(g.hx, g.hy), unit = std::pow(h, 2 * options.smoothness);
+    // From the largest lambda down, each solve starting from the previous
+    // one's solution; the search stops once the score has risen at two
+    // successive lambdas below the best (the small lambdas are the costly
+    // solves, and the score rises towards interpolation).
     double best_score = 0;
-    for (int k = 0; k <= 14; ++k) {
+    int rises = 0;
+    for (int k = 14; k >= 0 && rises < 2; --k) {
       const double lambda = unit * std::pow(10.0, -6 + 0.5 * k);
       solve(lambda, x);
       evaluate(s, target, g, x, at.data(), threads);
@@ -1250,10 +1273,13 @@ Coefficients project_variational(const ScatteredSamples& samples, const Scattere
       const double dof = std::max(double(N) - trace, 1e-300);
       const double score = double(N) * rss / C / (dof * dof);
       rep.gcv.push_back({lambda, score});
-      if (k == 0 || score < best_score) {
+      if (k == 14 || score < best_score) {
         best_score = score;
         best_lambda = lambda;
         best = x;
+        rises = 0;
+      } else {
+        ++rises;
       }
     }
   }
@@ -1262,7 +1288,7 @@ Coefficients project_variational(const ScatteredSamples& samples, const Scattere
     for (int ch = 0; ch < C; ++ch) c.data[e * C + ch] = best.data[e * A + ch];
   rep.lambda = best_lambda;
   rep.residual.resize(C);
-  rep.bytes = (sums.data.size() + 7 * b.data.size() + at.size() + s.values.size()) * sizeof(double);
+  rep.bytes = variational_bytes(std::uint64_t(g.nx) * std::uint64_t(g.ny), N, C, P);
   if (report) *report = rep;
   return make_coefficients(target, std::move(c));
 }

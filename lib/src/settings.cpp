@@ -513,7 +513,7 @@ Formed form_scattered(const Settings& o, const Resolved& r, ScatteredInput in, c
   std::uint64_t working = 0;
   try {
     extent = scattered_grid(target);
-    working = scattered_bytes(target, in.samples);
+    working = scattered_bytes(target, in.samples, r.scattered);
   } catch (const std::invalid_argument& e) {
     throw RequestError(label + ": " + e.what());
   }

@@ -98,8 +98,9 @@ struct ScatteredOptions {
   int threads = 1;
   // Variational: lambda (frame units: output pixels) >= 0, or empty for
   // generalised cross-validation over lambda = t h^(2 order), t = 10^-6,
-  // 10^-5.5, ..., 10^1 (h the larger lattice step), the trace of the hat
-  // matrix estimated with gcv_probes Rademacher probes; the functional's
+  // 10^-5.5, ..., 10^1 (h the larger lattice step), tried from the largest
+  // down (warm-started) until the score has risen twice past its lowest, the
+  // trace of the hat matrix estimated with gcv_probes Rademacher probes; the functional's
   // order (1 or 2); at most variational_iterations CG iterations, fewer when
   // the residual falls to variational_tolerance times b's.
   std::optional<double> lambda;
@@ -161,10 +162,12 @@ Coefficients project_scattered(const ScatteredSamples& samples, const ScatteredT
 // lattice extent; on the hexagonal lattice the offset-row grid with its
 // margin); std::invalid_argument for a target that cannot be projected.
 std::pair<long, long> scattered_grid(const ScatteredTarget& target);
-// The bytes the fit's working grids and values at the samples take (the
-// one-pass rules take less), from the samples' count and, on the hexagonal
-// lattice, their images (positions not checked: a bad one has none).
-std::uint64_t scattered_bytes(const ScatteredTarget& target, const ScatteredSamples& samples);
+// The bytes the rule's working grids and values at the samples take (the
+// fit's for the one-pass rules, which take less; the variational rule's with
+// its GCV probes as extra channels), from the samples' count and, on the
+// hexagonal lattice, their images (positions not checked: a bad one has none).
+std::uint64_t scattered_bytes(const ScatteredTarget& target, const ScatteredSamples& samples,
+                              const ScatteredOptions& options = {});
 
 // f_app of the coefficients' space at every sample (channel fastest): what
 // the fit's residual is measured with. Hexagonal coefficients are periodic
