@@ -147,3 +147,29 @@ TEST_F(FactorCli, HexagonalTableTooLargeForMemoryIsRefused) {
   EXPECT_NE(r.output.find("of memory"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(path("o.exr")));
 }
+
+TEST_F(FactorCli, VariationalWorkingSetIsCountedBeforeItIsAllocated) {
+  // 4,000,000 samples at random positions (three oiiotool noise channels:
+  // a value and pFilm.x, pFilm.y) onto 500 x 500. The fit's working set is
+  // six grids and a value per sample (about 44 MB); the variational rule by
+  // GCV solves 4 probes beside the value (5 channels) through nine grids and
+  // keeps f_app and the values of all five at every sample (about 530 MB).
+  // Under a 1 GB address-space limit the fit runs, and the variational rule
+  // is refused before it allocates: status 2, the memory named, no output.
+  const std::string noise = "--pattern noise:type=uniform:min=0:max=1:seed=";
+  const Result made = run_tool("cd " + dir_ + " && oiiotool",
+                               noise + "1 2000x2000 1 " + noise + "2 2000x2000 1 " + noise +
+                                   "3 2000x2000 1 --chappend --chappend --chnames R,pFilm.x,pFilm.y "
+                                   "--mulc 1,500,500 -d float -o s.exr");
+  ASSERT_EQ(made.status, 0) << made.output;
+  const std::string run = "ulimit -v 1000000; " + std::string(SIPROJECT);
+  const std::string in = path("s.exr") + " --size 500x500 -o " + path("o.exr");
+  const Result fit = run_tool(run, in + " --rule fit");
+  ASSERT_EQ(fit.status, 0) << fit.output;
+  std::filesystem::remove(path("o.exr"));
+  const Result v = run_tool(run, in + " --rule variational");
+  EXPECT_EQ(v.status, 2) << v.output;
+  EXPECT_NE(v.output.find("the request needs about"), std::string::npos) << v.output;
+  EXPECT_NE(v.output.find("4000000 scattered samples"), std::string::npos) << v.output;
+  EXPECT_FALSE(std::filesystem::exists(path("o.exr")));
+}
