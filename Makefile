@@ -739,7 +739,9 @@ compare-hex: $(if $(PREBUILT),,build)
 # objects, zoneplate and checker from a render at factor 8 of a 1024 x 1024
 # frame, levels 0 to 5 by siproject (box, tent, cubic; centred and 2x2)
 # against maketx's levels of the same render (box, lanczos3, lanczos3
-# --hicomp): continuous L2
+# --hicomp) and splineops' least-squares cubic resize of it to each level's
+# size (scripts/splineops_resize.py; measured in its own, endpoint-aligned
+# geometry): continuous L2
 # error against the truth (factor 32, the zone plate's closed form), the
 # displayed level against the truth's area averages, negative samples, time
 # and peak memory of the whole pyramid. $(OUT)/report/mip/ (QUICK:
@@ -916,10 +918,13 @@ compare-sparse: $(if $(PREBUILT),,build)
 # estimators against the oracle (per-tile error of min-error cubic) and the
 # L2 error against rays per pixel of uniform sobol rays and adaptive ones,
 # every set a subset of the sobol render of 64 rays per pixel
-# (scripts/compare_adaptive.py); POV-Ray's own adaptive antialiasing
+# (scripts/compare_adaptive.py); the variational rule of uniform sobol rays
+# from 0.25 to 4 rays per pixel (sobol renders at FACTOR 0.5 and 0.70710678
+# below one ray per pixel); POV-Ray's own adaptive antialiasing
 # (+AM1/+AM2 at several thresholds and depths, renders of their own under
 # $(AD_WORK)/pov-aa/) at its rays per pixel; every row's displayed error too;
-# and make SAMPLES=adaptive RAYS=16's own two passes measured.
+# and make SAMPLES=adaptive RAYS=16's own two passes measured, the second
+# also as rectangular partial renders (AD_RECT_SCENES).
 # $(OUT)/report(-quick)/adaptive/adaptive.md, adaptive.csv, estimators.csv,
 # adaptive.png. QUICK=1: objects and edges at 128^2, reference factor 16;
 # the full study adds hdr, checker and the zone plate (its closed form the
@@ -934,16 +939,23 @@ AD_RES ?= 256
 AD_REF_FACTOR ?= 32
 endif
 AD_WORK ?= $(OUT)/compare-adaptive$(if $(QUICK),-quick)
+# the scenes whose second pass is also timed as rectangular partial renders
+# (scripts/rect_pass.py: a POV-Ray process per refined tile, and per run of
+# adjacent tiles), rectangles-SCENE.md beside adaptive.md
+AD_RECT_SCENES ?= objects
 AD_MAKE = $(MAKE) --no-print-directory SIPROJECT=$(SIPROJECT) SIMETRICS=$(SIMETRICS) SIRAYS=$(SIRAYS) \
   OUT=$(AD_WORK) RES=$(AD_RES) ZP_NYQUIST=$(ZP_NYQUIST)
 .PHONY: compare-adaptive
 compare-adaptive: $(if $(PREBUILT),,build)
 	@set -e; for s in $(AD_SCENES); do \
 	  [ $$s = zoneplate ] || $(AD_MAKE) SCENE=$$s FACTOR=$(AD_REF_FACTOR) render; \
-	  for f in 2 4 8; do $(AD_MAKE) -j$(JOBS) SCENE=$$s FACTOR=$$f SAMPLES=sobol SEED=0 render; done; \
+	  for f in 0.5 0.70710678 2 4 8; do $(AD_MAKE) -j$(JOBS) SCENE=$$s FACTOR=$$f SAMPLES=sobol SEED=0 render; done; \
 	  $(AD_MAKE) SCENE=$$s SAMPLES=adaptive RAYS=16 SEED=0 METHODS=me-cubic scene >/dev/null; \
 	done
 	@PYTHONPATH=$(BUILD)/python $(PYTHON) scripts/compare_adaptive.py --work $(AD_WORK) \
 	  --report $(OUT)/report$(if $(QUICK),-quick)/adaptive --scenes "$(AD_SCENES)" --res $(AD_RES) \
 	  --ref-factor $(AD_REF_FACTOR) --seed 0 --sirays $(SIRAYS) --siproject $(SIPROJECT) \
 	  --zp-nyquist $(ZP_NYQUIST)
+	@set -e; for s in $(AD_RECT_SCENES); do \
+	  $(PYTHON) scripts/rect_pass.py --refinement $(AD_WORK)/render/$$s-$(AD_RES)-adaptive-r16-s0.refine.txt \
+	    --scene $(SCENEDIR)/$$s.pov --out $(OUT)/report$(if $(QUICK),-quick)/adaptive/rectangles-$$s.md; done

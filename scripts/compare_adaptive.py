@@ -21,6 +21,24 @@ correlation, and each chooses tiles (sirays refine's own plan, refined to
 64 rays per pixel) at budgets of 8 to 32 rays per pixel; so do both
 oracles (the same greedy plan).
 
+The variational rule (thin plate, lambda by GCV: docs/design.md section
+15) of uniform sobol rays at 0.25 and 0.5 rays per pixel (sobol renders at
+FACTOR 0.5 and 0.70710678) and at 1, 2 and 4 (the 64-ray render's subsets):
+below a few rays per pixel it is the better rule, so min-error's error at
+equal rays is the lower of the fit's and its curves.
+
+Per-tile ray counts and two passes, simulated from the same render: each
+tile's rays r_t = max(have_t, c sqrt(e_t have_t / p_t)) (the least total
+error if a tile's error falls as 1 / its rays), e_t the residual estimate
+(computed here; checked against sirays refine's), in one pass from the base
+or in two (half the extra budget, the estimate again from both passes' rays,
+the rest).
+
+The hexagonal lattice (hex quartic by the fit): the estimators (made on the
+Cartesian cubic, as sirays refine makes them) against its own per-tile
+error, and its L2 error with uniform rays and with the residual estimate's
+tiles.
+
 POV-Ray's own adaptive antialiasing at the final size (POVRAY_AA: +A
 threshold, a pixel supersampled where it differs from a neighbour by more;
 +AM1 a grid of R x R rays, +AM2 corners subdivided to depth R), rendered by
@@ -60,6 +78,16 @@ from renders import make_render, render_path, zp_k  # noqa: E402  (make render's
 
 ESTIMATORS = ("halves", "contrast", "residual", "highpass")
 UNIFORM = (1, 2, 4, 8, 12, 16, 24, 32, 64)
+# The variational rule (thin plate, lambda by GCV) of uniform sobol rays: below
+# one ray per pixel from sobol renders of their own, (rays per pixel, FACTOR)
+# as make names them; from 1 to 4 the 64-ray render's subsets as above.
+VARIATIONAL_SPARSE = (("0.25", "0.5"), ("0.5", "0.70710678"))
+VARIATIONAL_UNIFORM = (1, 2, 4)
+VARIATIONAL = "variational (uniform sobol)"
+# The hexagonal lattice's rows (hex quartic, the fit).
+HEX = "hex quartic: "
+HEX_UNIFORM = (4, 8, 16, 64)
+HEX_BUDGETS = (8, 16)
 # POV-Ray's adaptive antialiasing: (method +AM, threshold +A, depth +R).
 POVRAY_AA = ((1, 0.3, 3), (1, 0.1, 4), (2, 0.3, 2), (2, 0.3, 3), (2, 0.1, 3), (2, 0.1, 4),
              (2, 0.03, 4))
@@ -142,14 +170,28 @@ class Scene:
         py, px = np.mgrid[0:H, 0:W]
         self.tile_of_pixel = ((py // T) * self.tcols + px // T).ravel()
 
-    def project(self, counts):
+    def project(self, counts, rule="fit", hex_lattice=False):
         j = np.arange(FINE)[None, :]
         mask = j < counts[:, None]
         values = self.V[mask]
         positions = self.X[mask]
         weights = np.repeat(1.0 / counts, counts)
         return siproject.coefficients(values, positions=positions, weights=weights,
-                                      size=(self.W, self.H), generator="cubic", method="min-error")
+                                      size=(self.W, self.H), method="min-error", rule=rule,
+                                      **(dict(lattice="hex", generator="hex-quartic") if hex_lattice
+                                         else dict(generator="cubic")))
+
+    def residual(self, counts, k):
+        """The residual estimator (sis/refinement.h) of the samples the
+        counts select: per tile, sum of w_i |f_i - f_app(x_i)|^2, w_i the
+        area a sample stands for (1 / its pixel's count)."""
+        j = np.arange(FINE)[None, :]
+        mask = j < counts[:, None]
+        pos = self.X[mask]
+        d = self.V[mask] - k.evaluate(pos[:, 0], pos[:, 1])
+        r = (d ** 2).sum(axis=-1) / np.repeat(counts, counts)
+        tiles = self.tile_of_pixel[np.repeat(np.arange(self.P), counts)]
+        return np.bincount(tiles, weights=r, minlength=self.tcols * self.trows)
 
     def displayed(self, image):
         """RMS of the image shown at the output size against the reference's
@@ -194,6 +236,30 @@ def plan(est, budget, P, tile_pixels):
     return sorted(chosen)
 
 
+def allocate(est, have, budget, P, tile_pixels):
+    """Rays per pixel for each tile at `budget` rays per pixel over the
+    frame, none fewer than `have` (its rays now) nor more than FINE: under
+    the model that a tile's error falls as 1 / its rays (est measured at
+    have), the least total error is at r_t = max(have_t, c sqrt(est_t have_t
+    / p_t)), c the largest that fits the budget (bisection), rounded down."""
+    est, have, p = np.asarray(est, float), np.asarray(have, float), np.asarray(tile_pixels, float)
+    want = np.sqrt(np.maximum(est, 0) * have / p)
+
+    def counts(c):
+        return np.clip(np.floor(np.maximum(have, c * want)), have, FINE).astype(np.int64)
+    allowed = math.floor(budget * P + 1e-6)
+    lo, hi = 0.0, 1.0
+    while (counts(hi) * p).sum() <= allowed and hi < 1e30 and (counts(hi) < FINE).any():
+        hi *= 2
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if (counts(mid) * p).sum() <= allowed:
+            lo = mid
+        else:
+            hi = mid
+    return counts(lo)
+
+
 def sirays_refine(a, s, budget, estimator, work, fine=FINE):
     """sirays refine's tiles, refined rays (fine None: the tool's choice),
     estimates and wall time."""
@@ -227,6 +293,19 @@ def measure(a):
                              displayed=s.displayed(k.resample()),
                              displayed_pixel=s.displayed(k.resample(display="pixel")), tiles=0,
                              seconds=seconds))
+        for rays, factor in VARIATIONAL_SPARSE + tuple((n, None) for n in VARIATIONAL_UNIFORM):
+            t = time.perf_counter()
+            if factor is None:
+                k = s.project(np.full(s.P, rays, dtype=np.int64), rule="variational")
+            else:
+                k = siproject.coefficients(need(render_path(a.work, scene, a.res, factor, "sobol", a.seed)),
+                                           size=(s.W, s.H), generator="cubic", method="min-error",
+                                           rule="variational")
+            seconds = time.perf_counter() - t
+            rows.append(dict(scene=scene, rays=float(rays), method=VARIATIONAL, l2=s.truth.l2_error(k),
+                             displayed=s.displayed(k.resample()),
+                             displayed_pixel=s.displayed(k.resample(display="pixel")), tiles=0,
+                             seconds=seconds, note="lambda %.3g" % k.report["lambda"]))
         true = s.tile_errors(uniform[BASE])
         reducible = s.tile_errors(uniform[BASE], uniform[FINE])
         tile_pixels = [int((s.tile_of_pixel == t).sum()) for t in range(len(true))]
@@ -265,6 +344,65 @@ def measure(a):
                                      l2=s.truth.l2_error(k), displayed=s.displayed(k.resample()),
                                      displayed_pixel=s.displayed(k.resample(display="pixel")),
                                      tiles=len(tiles), budget=budget, refined=rays, seconds=seconds))
+        # Per-tile rays and two passes, simulated from the same 64-ray
+        # render with the residual estimator computed here (checked against
+        # sirays refine's at the base).
+        ntiles = s.tcols * s.trows
+        base_counts = np.full(s.P, BASE, dtype=np.int64)
+        e0 = s.residual(base_counts, uniform[BASE])
+        check = spearmanr(e0, choices["residual"][0])[0]
+        notes.append(f"{scene}: the residual estimate computed by the script against sirays refine's at "
+                     f"the base: Spearman {check:.6f}")
+        for budget in BUDGETS:
+            for passes in (1, 2):
+                t = time.perf_counter()
+                have = np.full(ntiles, BASE)
+                est = e0
+                for q in range(passes):
+                    step = BASE + (budget - BASE) * (q + 1) / passes
+                    have = allocate(est, have, step, s.P, tile_pixels)
+                    counts = have[s.tile_of_pixel]
+                    k = s.project(counts)
+                    if q + 1 < passes:
+                        est = s.residual(counts, k)
+                seconds = time.perf_counter() - t
+                label = ("adaptive residual, per-tile rays" if passes == 1 else
+                         "adaptive residual, per-tile rays, two passes") + " (simulated)"
+                rows.append(dict(scene=scene, rays=float(counts.sum()) / s.P, method=label,
+                                 l2=s.truth.l2_error(k), displayed=s.displayed(k.resample()),
+                                 displayed_pixel=s.displayed(k.resample(display="pixel")),
+                                 tiles=int((have > BASE).sum()), budget=budget,
+                                 refined=f"{int(have.max())} most", seconds=seconds))
+        # The hexagonal lattice (hex quartic, the fit): the estimators, made
+        # on the Cartesian cubic as sirays refine makes them, against its own
+        # oracle, and its L2 error with uniform rays and with the residual
+        # estimator's tiles (the tool's rays).
+        hex_uniform = {}
+        for n in HEX_UNIFORM:
+            t = time.perf_counter()
+            k = s.project(np.full(s.P, n, dtype=np.int64), hex_lattice=True)
+            hex_uniform[n] = k
+            rows.append(dict(scene=scene, rays=float(n), method=HEX + "uniform sobol",
+                             l2=s.truth.l2_error(k), displayed=s.displayed(k.resample()),
+                             displayed_pixel=math.nan, tiles=0, seconds=time.perf_counter() - t))
+        hex_true = s.tile_errors(hex_uniform[BASE])
+        for e in ESTIMATORS:
+            top = np.argsort(-choices[e][0], kind="stable")[: max(1, len(hex_true) // 5)]
+            est_rows.append(dict(scene=scene, estimator=e + " (hex quartic's error)",
+                                 spearman_true=spearmanr(choices[e][0], hex_true)[0],
+                                 spearman_reducible=math.nan,
+                                 top20_true_share=hex_true[top].sum() / hex_true.sum(),
+                                 top20_reducible_share=math.nan, seconds=0.0))
+        for budget in HEX_BUDGETS:
+            t = time.perf_counter()
+            tiles, rays, _, _ = sirays_refine(a, s, budget, "residual", work, None)
+            counts = s.counts_for(tiles, rays)
+            k = s.project(counts, hex_lattice=True)
+            rows.append(dict(scene=scene, rays=float(counts.sum()) / s.P,
+                             method=HEX + "adaptive residual, the tool's rays", l2=s.truth.l2_error(k),
+                             displayed=s.displayed(k.resample()), displayed_pixel=math.nan,
+                             tiles=len(tiles), budget=budget, refined=rays,
+                             seconds=time.perf_counter() - t))
         for am, threshold, depth in POVRAY_AA:
             path, st, _ = make_render(os.path.join(a.work, "pov-aa", aa_name(am, threshold, depth)),
                                       scene, a.res, 1, povopts=[f"+A{threshold:g}", f"+AM{am}", f"+R{depth}", "-J"],
@@ -285,7 +423,7 @@ def write(a, rows, est_rows, notes, pipeline):
     os.makedirs(a.report, exist_ok=True)
     with open(os.path.join(a.report, "adaptive.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=["scene", "method", "budget", "rays", "tiles", "refined", "l2",
-                                          "displayed", "displayed_pixel", "seconds"],
+                                          "displayed", "displayed_pixel", "seconds", "note"],
                            extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
@@ -307,7 +445,7 @@ def write(a, rows, est_rows, notes, pipeline):
               "| estimator | Spearman vs true error | vs reducible error | true error in its worst 20 % "
               "| reducible error in its worst 20 % | seconds (sirays refine) |",
               "| --- | --- | --- | --- | --- | --- |"]
-        for r in [r for r in est_rows if r["scene"] == scene]:
+        for r in [r for r in est_rows if r["scene"] == scene and "hex" not in r["estimator"]]:
             L.append(f"| {r['estimator']} | {r['spearman_true']:.3f} | {r['spearman_reducible']:.3f} | "
                      f"{r['top20_true_share']:.3f} | {r['top20_reducible_share']:.3f} | {r['seconds']:.2f} |")
         L += ["", "### L2 error against rays per pixel", "",
@@ -318,41 +456,62 @@ def write(a, rows, est_rows, notes, pipeline):
               "| method | budget | rays per pixel | tiles refined | to rays per pixel | L2 | / uniform 64 | excess left |",
               "| --- | --- | --- | --- | --- | --- | --- | --- |"]
         for r in sr:
-            if r["method"].startswith("POV-Ray"):
+            if r["method"].startswith(("POV-Ray", HEX)):
                 continue
-            L.append(f"| {r['method']} | {r.get('budget', '')} | {r['rays']:.3f} | {r['tiles']} | {r.get('refined', '')} | "
+            method = r["method"] + (f" ({r['note']})" if r.get("note") else "")
+            L.append(f"| {method} | {r.get('budget', '')} | {r['rays']:.3f} | {r['tiles']} | {r.get('refined', '')} | "
                      f"{r['l2']:.6f} | {r['l2'] / u64:.4f} | {(r['l2'] - u64) / (u[4.0] - u64):.3f} |")
+        hx = [r for r in sr if r["method"].startswith(HEX)]
+        if hx:
+            h64 = next(r["l2"] for r in hx if r["method"] == HEX + "uniform sobol" and r["rays"] == 64.0)
+            L += ["", "### The hexagonal lattice (hex quartic, the fit)", "",
+                  "The estimators as sirays refine makes them (on the Cartesian cubic) against the hex "
+                  "quartic's own per-tile error at the base:", "",
+                  "| estimator | Spearman vs hex quartic's true error | its true error in the worst 20 % |",
+                  "| --- | --- | --- |"]
+            for r in [r for r in est_rows if r["scene"] == scene and "hex" in r["estimator"]]:
+                L.append(f"| {r['estimator']} | {r['spearman_true']:.3f} | {r['top20_true_share']:.3f} |")
+            L += ["", "| method | budget | rays per pixel | tiles refined | to rays per pixel | L2 | "
+                  "/ hex uniform 64 |", "| --- | --- | --- | --- | --- | --- | --- |"]
+            for r in hx:
+                L.append(f"| {r['method']} | {r.get('budget', '')} | {r['rays']:.3f} | {r['tiles']} | "
+                         f"{r.get('refined', '')} | {r['l2']:.6f} | {r['l2'] / h64:.4f} |")
         L += ["", "### Against POV-Ray's adaptive antialiasing", "",
               "Each POV-Ray setting (its rays per pixel from its statistics; its L2 error as a box image, "
-              "its displayed error its pixels') against min-error cubic at equal rays: uniform sobol's L2 "
-              "error at exactly those rays per pixel (interpolated between the measured densities, "
-              "linearly in log rays and log error), and the lowest L2 error measured at no more rays per "
-              "pixel (uniform sobol or adaptive with the tool's rays) with that row's displayed errors: its "
-              "2x2 display (siproject's default) and its pixel display (the exact pixel averages of "
-              "f_app).", "",
-              "| POV-Ray | rays per pixel | L2 | displayed | min-error uniform at those rays: L2 | "
+              "its displayed error its pixels') against min-error cubic at equal rays: uniform sobol rays' L2 "
+              "error at exactly those rays per pixel by the fit and by the variational rule (each "
+              "interpolated between its measured densities, linearly in log rays and log error; the "
+              "lower of the two, its rule named), and the lowest L2 error measured at no more rays per "
+              "pixel (uniform sobol by either rule, or adaptive with the tool's rays) with that row's "
+              "displayed errors: its 2x2 display (siproject's default) and its pixel display (the exact "
+              "pixel averages of f_app).", "",
+              "| POV-Ray | rays per pixel | L2 | displayed | min-error uniform at those rays: L2 | rule | "
               "lower | lowest measured at <= those rays | its rays | L2 | displayed (2x2) | "
               "displayed (pixel) |",
-              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-        mine = [r for r in sr if r["method"] == "uniform sobol" or r["method"].endswith("the tool's rays")]
-        curve = sorted((r["rays"], r["l2"]) for r in sr if r["method"] == "uniform sobol")
+              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+        mine = [r for r in sr if r["method"] in ("uniform sobol", VARIATIONAL)
+                or r["method"].endswith("the tool's rays")]
+        curves = {rule: sorted((r["rays"], r["l2"]) for r in sr if r["method"] == m)
+                  for rule, m in (("fit", "uniform sobol"), ("variational", VARIATIONAL))}
+        curves = {rule: c for rule, c in curves.items() if c}
         wins = []
-        top = curve[-1][0]
         for r in [r for r in sr if r["method"].startswith("POV-Ray")]:
-            at = math.exp(np.interp(math.log(r["rays"]), [math.log(x) for x, _ in curve],
-                                    [math.log(y) for _, y in curve]))
+            # beyond a curve's densest point: its error there, at fewer rays
+            at, rule = min((math.exp(np.interp(math.log(r["rays"]), [math.log(x) for x, _ in c],
+                                               [math.log(y) for _, y in c])), rule)
+                           for rule, c in curves.items())
             wins.append(at < r["l2"])
-            # beyond the densest uniform render: its error, at fewer rays
+            top = curves[rule][-1][0]
             shown_at = f"{at:.6f}" + (f" (at {top:g})" if r["rays"] > top else "")
             best = min((m for m in mine if m["rays"] <= r["rays"] + 1e-9), key=lambda m: m["l2"], default=None)
             tail = (f"{best['method']} | {best['rays']:.3f} | {best['l2']:.6f} | {best['displayed']:.6f} | "
                     f"{best['displayed_pixel']:.6f}" if best else "none (fewer rays than any) | | | |")
             L.append(f"| {r['method']} | {r['rays']:.3f} | {r['l2']:.6f} | {r['displayed']:.6f} | "
-                     f"{shown_at} | {'yes' if wins[-1] else 'no'} | {tail} |")
+                     f"{shown_at} | {rule} | {'yes' if wins[-1] else 'no'} | {tail} |")
         L.append(f"- min-error cubic's L2 error at equal rays is lower than POV-Ray's in {sum(wins)} of "
                  f"{len(wins)} settings")
         limit = goal.get(scene, 16)
-        for m in sorted({r["method"] for r in sr if not r["method"].startswith("POV-Ray")}):
+        for m in sorted({r["method"] for r in sr if not r["method"].startswith(("POV-Ray", HEX))}):
             met = [r for r in sr if r["method"] == m and r["rays"] <= limit + 1e-9 and r["l2"] <= 1.02 * u64]
             best = min((r for r in sr if r["method"] == m and r["rays"] <= limit + 1e-9),
                        key=lambda r: r["l2"], default=None)
@@ -384,6 +543,7 @@ def chart(a, rows):
             ax = axes[row][col]
             for label, pick, style in (
                     ("uniform sobol (min-error cubic)", lambda r: r["method"] == "uniform sobol", "o-"),
+                    ("uniform sobol, variational rule", lambda r: r["method"] == VARIATIONAL, "D-"),
                     ("adaptive (min-error cubic)",
                      lambda r: r["method"] == "adaptive residual, the tool's rays", "s-"),
                     ("POV-Ray +AM (its pixels)", lambda r: r["method"].startswith("POV-Ray"), "^")):

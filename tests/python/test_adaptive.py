@@ -1,6 +1,7 @@
 """Adaptive rays from Python: refine() finds a busy quadrant's tiles, a
 second pass of the refined pixels' extra Sobol' points projected with
-refined= equals the same samples given as arrays bit for bit, nothing
+refined= equals the same samples given as arrays bit for bit (on both
+lattices), nothing
 refined is the uniform render bit for bit, and bad budgets are refused
 (docs/design.md section 17)."""
 
@@ -74,7 +75,10 @@ def test_refine_finds_the_busy_quadrant_and_refined_projects_both_passes(tmp_pat
     gw = 64  # the second pass's rows: as wide as the base's grid
     second = tmp_path / "second.exr"
     write_exr(second, ev, gw, len(ev) // gw, {"sis:refinement": plan["text"]})
-    got = siproject.project(base, refined=second, size=(W, H), generator="cubic", threads=1)
+    lattices = {"cartesian": dict(generator="cubic"),
+                "hex": dict(lattice="hex", generator="hex-quartic")}
+    got = {name: siproject.project(base, refined=second, size=(W, H), threads=1, **kw)
+           for name, kw in lattices.items()}
     # the same samples as arrays: the base's then the extra rays, each
     # weighing 1/64 in a refined pixel and 1/4 elsewhere (values through
     # float32, as the files hold them)
@@ -84,10 +88,11 @@ def test_refine_finds_the_busy_quadrant_and_refined_projects_both_passes(tmp_pat
     px = np.minimum(xy.astype(int), [W - 1, H - 1])
     w = np.where(refined[px[:, 1], px[:, 0]], 1 / 64, 1 / 4)
     allv = np.concatenate([values, ev]).astype(np.float32)
-    want = siproject.project(allv, positions=np.concatenate([xy, ex]),
-                             weights=np.concatenate([w, np.full(len(ex), 1 / 64)]),
-                             size=(W, H), generator="cubic", threads=1)
-    assert np.array_equal(got, want)
+    for name, kw in lattices.items():
+        want = siproject.project(allv, positions=np.concatenate([xy, ex]),
+                                 weights=np.concatenate([w, np.full(len(ex), 1 / 64)]),
+                                 size=(W, H), threads=1, **kw)
+        assert np.array_equal(got[name], want), name
 
 
 def test_nothing_refined_is_the_uniform_render_bit_for_bit(tmp_path):
