@@ -742,11 +742,13 @@ compare-hex: $(if $(PREBUILT),,build)
 # --hicomp) and splineops' least-squares cubic resize of it to each level's
 # size (scripts/splineops_resize.py; measured in its own, endpoint-aligned
 # geometry): continuous L2
-# error against the truth (factor 32, the zone plate's closed form), the
+# error against the truth (a render at MIP_REF_FACTOR, 32 unless given: a
+# 32768 x 32768 render a scene; the zone plate's closed form), the
 # displayed level against the truth's area averages, negative samples, time
 # and peak memory of the whole pyramid. $(OUT)/report/mip/ (QUICK:
-# $(OUT)/report-quick/mip/, objects at 128 x 128 and zoneplate at 256 x 256,
-# one timing run each).
+# $(OUT)/report-quick/mip-objects/ and mip-zoneplate/, objects at 128 x 128
+# and zoneplate at 256 x 256, one timing run each).
+MIP_REF_FACTOR ?= 32
 .PHONY: compare-mip
 compare-mip: $(if $(PREBUILT),,build)
 	@test -x $(PYTHON) || { echo "compare-mip: $(PYTHON) not found: run scripts/setup.sh (make setup)" >&2; exit 1; }
@@ -757,7 +759,7 @@ ifneq ($(QUICK),)
 	  --siproject $(BUILD)/tools/siproject --work $(OUT)/compare-mip-quick --report $(OUT)/report-quick/mip-zoneplate
 else
 	@$(PYTHON) scripts/compare_mip.py --out $(OUT) --siproject $(BUILD)/tools/siproject \
-	  --work $(OUT)/compare-mip --report $(OUT)/report/mip
+	  --work $(OUT)/compare-mip --report $(OUT)/report/mip --ref-factor $(MIP_REF_FACTOR)
 endif
 # make compare-samples [QUICK=1]: the sample patterns compared
 # (scripts/compare_samples.py): every scene, pattern, density and seed
