@@ -44,6 +44,12 @@
 #                    in bands of at most MESH_RAYS rays, and write to
 #                    $(OUT)/SCENE-SAMPLES-sSEED/
 #   SEED=0           the pattern's seed (jitter, sobol)
+#   RULE=auto        jitter, sobol, adaptive: how me-cubic and me-cubic-2x2
+#                    fit the scattered rays (siproject --rule): fit,
+#                    variational (the smoothing spline, lambda by GCV), or
+#                    auto: variational below 4 rays per pixel (FACTOR^2, or
+#                    RAYS), fit from 4 (docs/studies.md "Adaptive rays");
+#                    the other methods keep their own rule
 #   MESH_RAYS=2000000  rays per mesh band (one POV-Ray process each, make -j)
 #   TILES=1          render in TILES row bands, each its own POV-Ray process
 #                    (+SR/+ER, cropped to its rows with oiiotool): with make -j
@@ -105,6 +111,7 @@ FACTOR ?= 4
 METHODS ?= box conv-tent me-tent mitchell me-cubic me-tent-2x2 me-cubic-2x2
 CUTOFFS ?= 0.125 0.25
 SIFLAGS ?=
+RULE ?= auto
 POVOPTS ?=
 ZP_NYQUIST ?= 0.7
 SCENEDIR ?= scenes
@@ -240,6 +247,14 @@ PATTERN := $(SAMPLES)
 endif
 ADAPT_TILE ?= 8
 ADAPT_ESTIMATOR ?= residual
+ifeq ($(filter $(RULE),auto fit variational),)
+$(error RULE=$(RULE): expected auto, fit or variational)
+endif
+# The scattered rule of the min-error cubic methods (RULE=auto: variational
+# below 4 rays per pixel, where it is the closer one).
+RULE_RAYS := $(if $(ADAPTIVE),$(RAYS),$(shell awk 'BEGIN { print $(FACTOR) * $(FACTOR) }'))
+SCATTERED_RULE := $(if $(filter auto,$(RULE)),$(shell awk 'BEGIN { print ($(RULE_RAYS) < 4) ? "variational" : "fit" }'),$(RULE))
+rule_opts_of = $(if $(SAMPLES_TAG),$(if $(filter me-cubic me-cubic-2x2,$(1)),$(if $(filter variational,$(SCATTERED_RULE)),--rule variational)))
 ifneq ($(shell echo '$(SEED)' | grep -Ex '[0-9]+'),$(SEED))
 $(error SEED=$(SEED): expected a whole number >= 0)
 endif
@@ -310,7 +325,7 @@ band_y0 = $(shell i=$$(( $(1) )); \
   elif [ $(engine_bands) -ge $(TILES) ]; then echo $$(( $(BAND_ROWS) * ( i * $(engine_bands) / $(TILES) ) )); \
   else echo $$(( i * $(RENDER_H) / $(TILES) )); fi)
 inputs_of = $(if $(filter 1,$(TILES))$(SAMPLES_TAG),$(call render_of,$(1)),$(foreach i,$(band_indices),$(call band_of,$(1),$(i))))
-method_cmd_of = $(strip $(SIPROJECT) $(call inputs_of,$(1)) $(if $(filter 1,$(TILES))$(SAMPLES_TAG),,--bands) $(if $(ADAPTIVE),--refined $(call extra_of,$(1))) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(SIFLAGS))
+method_cmd_of = $(strip $(SIPROJECT) $(call inputs_of,$(1)) $(if $(filter 1,$(TILES))$(SAMPLES_TAG),,--bands) $(if $(ADAPTIVE),--refined $(call extra_of,$(1))) --size $(RES_W)x$(RES_H) $(METHOD_OPTS_$(2)) $(call rule_opts_of,$(2)) $(SIFLAGS))
 # SAMPLES=adaptive: the refinement (sirays refine), every tile's estimate,
 # the second pass's render (the extra rays) and its statistics.
 adapt_name_of = $(OUT)/render/$(1)-$(RES_TAG)-adaptive-r$(RAYS)-s$(SEED)

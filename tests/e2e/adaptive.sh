@@ -69,6 +69,27 @@ else
   cat "$tmp/log" >&2; fail "make SAMPLES=adaptive RAYS=4 or SAMPLES=sobol FACTOR=2 failed"
 fi
 
+# 2b. RULE: below 4 rays per pixel (RULE=auto) me-cubic fits the rays by
+# the variational rule, siproject's own result bit for bit; conv-tent keeps
+# its normalised rule; RULE=fit is the fit
+if mk SAMPLES=sobol FACTOR=1 >"$tmp/log" 2>&1; then
+  r=$tmp/out/render/objects-32-f1-sobol-s0.exr u=$tmp/out/objects-sobol-s0
+  "$siproject" "$r" --size 32x32 --generator cubic --method min-error --display centred --rule variational \
+    -o "$tmp/v.exr" -d float -q
+  "$siproject" "$r" --size 32x32 --generator cubic --method min-error --display centred -o "$tmp/f.exr" -d float -q
+  if oiiotool "$u/me-cubic.exr" "$tmp/v.exr" --fail 0 --warn 0 --diff >"$tmp/diff" 2>&1 &&
+     ! oiiotool "$u/me-cubic.exr" "$tmp/f.exr" --fail 0 --warn 0 --diff >/dev/null 2>&1 &&
+     grep -q -- "--rule variational" "$u/.me-cubic.cmd" && ! grep -q -- "--rule" "$u/.conv-tent.cmd" &&
+     mk SAMPLES=sobol FACTOR=1 RULE=fit >"$tmp/log" 2>&1 &&
+     oiiotool "$u/me-cubic.exr" "$tmp/f.exr" --fail 0 --warn 0 --diff >"$tmp/diff" 2>&1; then
+    ok "RULE=auto at 1 ray per pixel: me-cubic by the variational rule (siproject's bits), conv-tent as before; RULE=fit: the fit"
+  else
+    cat "$tmp/log" "$tmp/diff" >&2; fail "RULE: me-cubic at 1 ray per pixel is not the rule's result"
+  fi
+else
+  cat "$tmp/log" >&2; fail "make SAMPLES=sobol FACTOR=1 failed"
+fi
+
 # 3. refusals
 expect() {  # NAME STATUS TEXT command...
   local name=$1 status=$2 text=$3; shift 3
@@ -83,6 +104,7 @@ expect() {  # NAME STATUS TEXT command...
 base=$tmp/out/render/objects-32-f2-sobol-s0.exr
 expect "make: a budget below the base" 2 "RAYS=2 is below the first pass's ADAPT_BASE=4" mk SAMPLES=adaptive RAYS=2 ADAPT_BASE=4
 expect "make: no budget" 2 "SAMPLES=adaptive needs RAYS=N" mk SAMPLES=adaptive
+expect "make: an unknown rule" 2 "RULE=normalised: expected auto, fit or variational" mk SAMPLES=sobol RULE=normalised
 expect "make: a base of 2 rays" 2 "ADAPT_BASE=2: the first pass's rays per pixel must be the square" mk SAMPLES=adaptive RAYS=8 ADAPT_BASE=2
 expect "sirays refine: a budget below the base" 2 "--rays 3: a budget of 3 rays per pixel is below the base pattern's 4" \
   "$sirays" refine "$base" -o "$tmp/r.txt" --rays 3
