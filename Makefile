@@ -406,7 +406,7 @@ $(call dir_of,$(1))/summary.txt $(call dir_of,$(1))/summary.csv &: $(foreach m,$
 
 # The page of the scene's images side by side, two enlarged crops each, and the summary.
 $(call dir_of,$(1))/index.html: $(foreach m,$(METHODS),$(call dir_of,$(1))/$(m).png) $(if $(ADAPTIVE),$(call dir_of,$(1))/rays.png) $(call dir_of,$(1))/summary.txt scripts/scene_page.py
-	@$$(PYTHON) scripts/scene_page.py $(call dir_of,$(1)) $(foreach m,$(METHODS),'$(m)=$(METHOD_OPTS_$(m))')
+	@$$(PYTHON) scripts/scene_page.py $(call dir_of,$(1)) $(foreach m,$(METHODS),'$(m)=$(strip $(METHOD_OPTS_$(m)) $(call rule_opts_of,$(m)))')
 endef
 
 # $(call adaptive_rules,SCENE): the refinement from the first pass, then
