@@ -755,6 +755,14 @@ TEST_F(Cli, VariationalRuleRunsAndRefusesBadOptions) {
   const Result gcv = run(in + " --rule variational --smoothness 1");
   ASSERT_EQ(gcv.status, 0) << gcv.output;
   fs::remove(path("v.exr"));
+  // The hexagonal lattice: the thin plate with hex-quartic, order 1 with either.
+  for (const std::string hex : {" --lattice hex --generator hex-quartic --lambda 0.1",
+                                " --lattice hex --generator hex-hat --smoothness 1"}) {
+    const Result h = run(in + " --rule variational" + hex);
+    ASSERT_EQ(h.status, 0) << hex << ": " << h.output;
+    EXPECT_EQ(size_of(path("v.exr")), std::make_pair(16L, 12L));
+    fs::remove(path("v.exr"));
+  }
   struct Case {
     std::string opts, needle;
   };
@@ -762,7 +770,10 @@ TEST_F(Cli, VariationalRuleRunsAndRefusesBadOptions) {
                         Case{"--rule variational --lambda nan", "--lambda 'nan'"},
                         Case{"--rule variational --lambda big", "--lambda 'big'"},
                         Case{"--rule variational --smoothness 3", "--smoothness 3"},
-                        Case{"--rule variational --lattice hex", "--lattice cartesian"},
+                        Case{"--rule variational --lattice hex --generator hex-hat",
+                             "--smoothness 2 (the thin plate, the default) needs"},
+                        Case{"--rule variational --lattice hex --generator hex-hat --smoothness 2",
+                             "--generator hex-hat"},
                         Case{"--rule fit --lambda 0.1", "--lambda applies to --rule variational"}}) {
     const Result r = run(in + " " + c.opts);
     EXPECT_NE(r.status, 0) << c.opts;

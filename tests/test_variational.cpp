@@ -339,8 +339,9 @@ TEST(Variational, BadInputIsRefusedWithAClearMessage) {
   expect_error(s, target(6, 5, 1, Boundary::Mirror), variational(0.1, 2),
                "order 2 needs a B-spline of degree 2 or more");
   ScatteredTarget hex = t;
-  hex.space = HexagonalSpace{};
-  expect_error(s, hex, variational(0.1), "needs the Cartesian lattice");
+  hex.space = HexagonalSpace{1, 1.0};  // hex-hat: C0, no thin plate
+  expect_error(s, hex, variational(0.1), "--smoothness 2 (the thin plate) needs");
+  expect_error(s, hex, variational(0.1), "hex-hat");
   EXPECT_EQ(parse_scattered_rule("variational"), ScatteredRule::Variational);
   EXPECT_STREQ(scattered_rule_name(ScatteredRule::Variational), "variational");
 }

@@ -35,19 +35,28 @@ struct ComplexBuffer {
 }  // namespace
 
 HexPrefilterPlan::HexPrefilterPlan(int order, long Q, long R) : Q_(Q), R_(R), H_(Q / 2 + 1) {
+  init(BoxSpline::hexagonal(order).autocorrelation());
+}
+
+HexPrefilterPlan::HexPrefilterPlan(const std::vector<HexTap>& taps, long Q, long R)
+    : Q_(Q), R_(R), H_(Q / 2 + 1) {
+  init(taps);
+}
+
+void HexPrefilterPlan::init(const std::vector<HexTap>& taps) {
+  const long Q = Q_, R = R_;
   if (Q < 1 || R < 2 || R % 2 != 0) {
     std::ostringstream m;
     m << "HexPrefilterPlan(): a " << Q << " x " << R
       << " grid is not an offset-row grid (rows must be even and positive)";
     throw std::invalid_argument(m.str());
   }
-  const BoxSpline& B = BoxSpline::hexagonal(order);
   // A(m1, m2) = sum_k2 Re(exp(i theta2 k2) S_k2(theta1)),
   // S_k2(theta1) = sum_k1 a[k1, k2] exp(i theta1 (k1 + k2/2)).
   std::map<int, std::vector<HexTap>> by_row;
-  for (const HexTap& t : B.autocorrelation()) by_row[t.k2].push_back(t);
+  for (const HexTap& t : taps) by_row[t.k2].push_back(t);
   std::vector<int> k2s;
-  for (const auto& [k2, taps] : by_row) k2s.push_back(k2);
+  for (const auto& [k2, row] : by_row) k2s.push_back(k2);
   std::vector<cplx> e2(std::size_t(R) * k2s.size());
   for (long m2 = 0; m2 < R; ++m2)
     for (std::size_t q = 0; q < k2s.size(); ++q)

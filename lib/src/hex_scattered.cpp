@@ -210,6 +210,21 @@ long hex_image_count(const HexScatteredGrid& g, const ScatteredSamples& s, HexIm
   return n;
 }
 
+std::vector<long> hex_image_owners(const HexScatteredGrid& g, const ScatteredSamples& s,
+                                   HexImages images) {
+  std::vector<long> owner;
+  Imager im(g, images);
+  for (long i = 0; i < s.count(); ++i) {
+    if (images == HexImages::Sample) {
+      owner.push_back(i);
+      continue;
+    }
+    im.of(s.positions[2 * i], s.positions[2 * i + 1]);
+    owner.insert(owner.end(), std::size_t(im.count()), i);
+  }
+  return owner;
+}
+
 namespace {
 
 // Coefficient rows [r0, r1) of the splat (hex_splat); AA: the values a

@@ -57,6 +57,11 @@ void hex_evaluate_images(const HexScatteredGrid& g, const ScatteredSamples& s,
 // The number of images the rule counts, over all samples.
 long hex_image_count(const HexScatteredGrid& g, const ScatteredSamples& s, HexImages images);
 
+// The sample each image the rule counts belongs to, in hex_image_count's
+// order (the variational rule's per-image values and weights).
+std::vector<long> hex_image_owners(const HexScatteredGrid& g, const ScatteredSamples& s,
+                                   HexImages images);
+
 // Coefficients on the target's grid holding c (the grid acquisition's record).
 Coefficients hex_scattered_coefficients(const HexScatteredGrid& g, Grid<double> c);
 

@@ -8,6 +8,7 @@
 
 #include <fftw3.h>
 #include <initializer_list>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -958,6 +959,15 @@ std::uint64_t variational_bytes(std::uint64_t n, long N, int C, int P) {
   return 8 * (n * (9 * A + 1 + 2) + std::uint64_t(N) * (3 + 2 * A));
 }
 
+// On the hexagonal lattice, for n coefficients and M images of the samples
+// in the grid's period: per image its owner, weight, values and f_app
+// (2 + 2A); b, the CG's r, z, p, q, R v, x and the best x (8A a
+// coefficient); the preconditioner's spectrum and divisors (about 2).
+std::uint64_t variational_bytes_hex(std::uint64_t n, long M, int C, int P) {
+  const std::uint64_t A = std::uint64_t(C + P);
+  return 8 * (n * (8 * A + 2) + std::uint64_t(M) * (2 + 2 * A));
+}
+
 }  // namespace
 
 std::pair<long, long> scattered_grid(const ScatteredTarget& target) {
@@ -976,6 +986,12 @@ std::uint64_t scattered_bytes(const ScatteredTarget& target, const ScatteredSamp
   if (options.rule == ScatteredRule::Variational && !is_hexagonal(target))
     return variational_bytes(std::uint64_t(nx) * std::uint64_t(ny), samples.count(), C,
                              options.lambda ? 0 : options.gcv_probes);
+  if (options.rule == ScatteredRule::Variational) {
+    const detail::HexScatteredGrid g = detail::hex_scattered_grid(target);
+    const long images = detail::hex_image_count(g, samples, detail::HexImages::Period);
+    return variational_bytes_hex(std::uint64_t(nx) * std::uint64_t(ny), images, C,
+                                 options.lambda ? 0 : options.gcv_probes);
+  }
   const std::uint64_t grid = std::uint64_t(nx) * std::uint64_t(ny) * C;
   // Cartesian: the sums, the fit's four grids and r, values per sample.
   // Hexagonal: one grid more (b), values per image in the grid's period
@@ -1154,13 +1170,182 @@ double rademacher(int p, long i) {
   return (z >> 63) ? 1.0 : -1.0;
 }
 
+// The variational rule's solves and lambda search, shared by both lattices
+// (docs/design.md section 15): (G + lambda R) x = b by conjugate gradients,
+// x from zero for a given lambda; for GCV, from the largest lambda down
+// (unit 10^(-6 + k/2), k = 14 .. 0), each solve warm-started from the
+// previous one's solution, stopping once the score has risen at two
+// successive lambdas below the best. The data are N points (the samples;
+// on the hexagonal lattice their images in the grid's period), point i
+// with weight weights[i] and A = C + P values (the C channels, then the P
+// probes z_i / sqrt(w_i)); evaluate_at(v, at) puts f_app of coefficients v
+// at the points in at (A values each), splat_at(at, out) adds
+// sum_i w_i at_i phi_i to out; apply_R(v, out) out = R v; make_pre(lambda)
+// the preconditioner (a pointer to a callable (in, out)). Returns the best
+// solution, all A channels; best_lambda the lambda it belongs to.
+template <typename Evaluate, typename Splat, typename ApplyR, typename MakePre>
+Grid<double> variational_search(long N, int C, int P, const std::vector<double>& weights,
+                                const std::vector<double>& values, const Grid<double>& b,
+                                std::vector<double>& at, const Evaluate& evaluate_at,
+                                const Splat& splat_at, const ApplyR& apply_R,
+                                const MakePre& make_pre, double unit,
+                                const ScatteredOptions& options, ScatteredReport& rep,
+                                double& best_lambda) {
+  const int A = C + P;
+  const bool gcv = P > 0;
+  const long nx = b.width, ny = b.height;
+  ScatteredOptions cg = options;
+  cg.iterations = options.variational_iterations;
+  cg.tolerance = options.variational_tolerance;
+  double wsum = 0;
+  for (long i = 0; i < N; ++i) wsum += weights[i];
+  // x is the starting point (zero, or the previous lambda's solution).
+  auto solve = [&](double lambda, Grid<double>& x) {
+    Grid<double> rc(nx, ny, A);
+    auto apply = [&](const Grid<double>& v, Grid<double>& out) {
+      evaluate_at(v, at.data());
+      std::fill(out.data.begin(), out.data.end(), 0.0);
+      splat_at(at.data(), out);
+      rep.passes += 2;
+      if (lambda > 0) {
+        apply_R(v, rc);
+        for (std::size_t e = 0; e < out.data.size(); ++e) out.data[e] += lambda * rc.data[e];
+      }
+    };
+    const auto pre = make_pre(lambda);
+    ScatteredReport r;
+    conjugate_gradients(x, b, apply, *pre, cg, r);
+    rep.iterations += r.iterations;
+    rep.residual = r.residual;
+  };
+  Grid<double> x(nx, ny, A), best;
+  best_lambda = 0;
+  if (!gcv) {
+    best_lambda = *options.lambda;
+    solve(best_lambda, x);
+    best = std::move(x);
+  } else {
+    // From the largest lambda down, each solve starting from the previous
+    // one's solution; the search stops once the score has risen at two
+    // successive lambdas below the best (the small lambdas are the costly
+    // solves, and the score rises towards interpolation).
+    double best_score = 0;
+    int rises = 0;
+    for (int k = 14; k >= 0 && rises < 2; --k) {
+      const double lambda = unit * std::pow(10.0, -6 + 0.5 * k);
+      solve(lambda, x);
+      evaluate_at(x, at.data());
+      rep.passes += 1;
+      double rss = 0, trace = 0;
+      for (long i = 0; i < N; ++i) {
+        const double w = weights[i] * double(N) / wsum;
+        for (int c = 0; c < C; ++c) {
+          const double r = values[std::size_t(i) * A + c] - at[std::size_t(i) * A + c];
+          rss += w * r * r;
+        }
+        for (int p = 0; p < P; ++p)
+          trace += rademacher(p, i) * std::sqrt(weights[i]) * at[std::size_t(i) * A + C + p];
+      }
+      trace /= P;
+      const double dof = std::max(double(N) - trace, 1e-300);
+      const double score = double(N) * rss / C / (dof * dof);
+      rep.gcv.push_back({lambda, score});
+      if (k == 14 || score < best_score) {
+        best_score = score;
+        best_lambda = lambda;
+        best = x;
+        rises = 0;
+      } else {
+        ++rises;
+      }
+    }
+  }
+  return best;
+}
+
+// The hexagonal lattice's variational rule (docs/design.md section 15): the
+// hexagonal fit's model and data (the coefficients periodic on their
+// offset-row grid, margin included; the samples' images in one period, each
+// with its sample's value and weight) plus lambda c^T R c, R the box
+// spline's smoothness stencil (HexSmoothnessOperator) applied periodically
+// on the grid; preconditioned by the exact inverse of the shift-invariant
+// approximation |det L| a + lambda R, diagonal in the grid's twisted 2-D DFT
+// (HexPrefilterPlan with those taps). GCV counts the images as the data
+// points, as the least-squares term does.
+Coefficients project_variational_hex(const ScatteredSamples& samples, const ScatteredTarget& target,
+                                     const ScatteredOptions& options, ScatteredReport* report) {
+  const int threads = options.threads < 1 ? 1 : options.threads;
+  const detail::HexScatteredGrid g = detail::hex_scattered_grid(target);
+  const HexSmoothnessOperator R(*g.spline, options.smoothness, g.layout.lattice.matrix());
+  const int C = samples.channels;
+  check(samples, target, C, threads);
+  const bool gcv = !options.lambda;
+  const int P = gcv ? options.gcv_probes : 0;
+  const int A = C + P;
+  const long nx = g.layout.columns, ny = g.layout.rows;
+  const long N = samples.count();
+  const std::vector<long> owner = detail::hex_image_owners(g, samples, detail::HexImages::Period);
+  const long M = long(owner.size());
+  // Per image: its sample's weight, values and probes (z / sqrt(w), z = +-1 per image).
+  const double w0 = target.width * target.height / double(N);
+  std::vector<double> weights(static_cast<std::size_t>(M)), values(std::size_t(M) * A);
+  for (long m = 0; m < M; ++m) {
+    const long i = owner[m];
+    weights[m] = samples.weights.empty() ? w0 : samples.weights[i];
+    for (int c = 0; c < C; ++c) values[std::size_t(m) * A + c] = samples.values[std::size_t(i) * C + c];
+    for (int p = 0; p < P; ++p) values[std::size_t(m) * A + C + p] = rademacher(p, m) / std::sqrt(weights[m]);
+  }
+  ScatteredReport rep;
+  Grid<double> b(nx, ny, A);
+  detail::hex_splat(g, samples, values.data(), A, true, detail::HexImages::Period, b, threads);
+  rep.passes = 1;
+  std::vector<double> at(std::size_t(M) * A);
+  const double area = std::abs(g.layout.lattice.determinant());
+  auto evaluate_at = [&](const Grid<double>& v, double* out) {
+    detail::hex_evaluate_images(g, samples, v, detail::HexImages::Period, out, threads);
+  };
+  auto splat_at = [&](const double* v, Grid<double>& out) {
+    detail::hex_splat(g, samples, v, A, true, detail::HexImages::Period, out, threads);
+  };
+  auto apply_R = [&](const Grid<double>& v, Grid<double>& out) { R.apply(v, out, threads); };
+  struct Pre {
+    HexPrefilterPlan plan;
+    int threads;
+    void operator()(const Grid<double>& in, Grid<double>& out) const {
+      out.data = in.data;
+      plan.execute(out, threads);
+    }
+  };
+  auto make_pre = [&](double lambda) {
+    std::map<std::pair<int, int>, double> sum;
+    for (const HexTap& t : g.spline->autocorrelation()) sum[{t.k1, t.k2}] += area * t.value;
+    for (const HexTap& t : R.taps()) sum[{t.k1, t.k2}] += lambda * t.value;
+    std::vector<HexTap> taps;
+    for (const auto& [k, v] : sum) taps.push_back({k.first, k.second, v});
+    return std::unique_ptr<Pre>(new Pre{HexPrefilterPlan(taps, nx, ny), threads});
+  };
+  double best_lambda = 0;
+  const double unit = std::pow(g.layout.step(), 2 * options.smoothness);
+  const Grid<double> best = variational_search(M, C, P, weights, values, b, at, evaluate_at, splat_at,
+                                               apply_R, make_pre, unit, options, rep, best_lambda);
+  Grid<double> c(nx, ny, C, kUnset);
+  for (std::size_t e = 0; e < c.data.size() / C; ++e)
+    for (int ch = 0; ch < C; ++ch) c.data[e * C + ch] = best.data[e * A + ch];
+  rep.lambda = best_lambda;
+  rep.residual.resize(C);
+  rep.bytes = variational_bytes_hex(std::uint64_t(nx) * std::uint64_t(ny), M, C, P);
+  if (report) *report = rep;
+  return detail::hex_scattered_coefficients(g, std::move(c));
+}
+
+std::string too_few_samples(int order, long needed, long n) {
+  return "scattered projection: the variational rule of order " + std::to_string(order) +
+         " needs at least " + std::to_string(needed) + " samples, got " + std::to_string(n);
+}
+
 Coefficients project_variational(const ScatteredSamples& samples, const ScatteredTarget& target,
                                  const ScatteredOptions& options, ScatteredReport* report) {
   const int threads = options.threads < 1 ? 1 : options.threads;
-  if (is_hexagonal(target))
-    throw std::invalid_argument(
-        "scattered projection: the variational rule needs the Cartesian lattice (--lattice "
-        "cartesian), not the hexagonal one");
   if (target.method != Method::MinError)
     throw std::invalid_argument(
         "scattered projection: the conventional method takes the normalised weighted average, not "
@@ -1176,15 +1361,25 @@ Coefficients project_variational(const ScatteredSamples& samples, const Scattere
     throw std::invalid_argument(
         "scattered projection: the variational rule's iterations and tolerance must be >= 0, its "
         "probes >= 1");
+  if (is_hexagonal(target)) {
+    const auto* hex = std::get_if<HexagonalSpace>(&target.space);
+    if (options.smoothness == 2 && hex->order < 2)
+      throw std::invalid_argument(
+          "scattered projection: --smoothness 2 (the thin plate) needs a generator with square "
+          "integrable second derivatives; hex-hat (C0) has none: use --smoothness 1 or "
+          "--generator hex-quartic");
+  }
+  const long N = samples.count();
+  const long needed = options.smoothness == 2 ? 3 : 1;  // J's null space: affine / constant
+  if (is_hexagonal(target)) {
+    if (N < needed)
+      throw std::invalid_argument(too_few_samples(options.smoothness, needed, N));
+    return project_variational_hex(samples, target, options, report);
+  }
   const Geometry g = geometry(target);
   const int degree = kernel_of(target).degree();
   const SmoothnessOperator R(degree, options.smoothness, g.hx, g.hy, target.boundary);
-  const long N = samples.count();
-  const long needed = options.smoothness == 2 ? 3 : 1;  // J's null space: affine / constant
-  if (N < needed)
-    throw std::invalid_argument("scattered projection: the variational rule of order " +
-                                std::to_string(options.smoothness) + " needs at least " +
-                                std::to_string(needed) + " samples, got " + std::to_string(N));
+  if (N < needed) throw std::invalid_argument(too_few_samples(options.smoothness, needed, N));
   const int C = samples.channels;
   check(samples, target, C, threads);
   const bool gcv = !options.lambda;
@@ -1216,73 +1411,21 @@ Coefficients project_variational(const ScatteredSamples& samples, const Scattere
   std::vector<double> at(std::size_t(N) * A);
   const std::vector<double> a = bspline_derivative_autocorrelation(degree, 0);
   const double area = g.hx * g.hy;
-  ScatteredOptions cg = options;
-  cg.iterations = options.variational_iterations;
-  cg.tolerance = options.variational_tolerance;
-  double wsum = 0;
-  for (long i = 0; i < N; ++i) wsum += s.weights[i];
-  // x is the starting point (zero, or the previous lambda's solution).
-  auto solve = [&](double lambda, Grid<double>& x) {
-    Grid<double> rc(g.nx, g.ny, A);
-    auto apply = [&](const Grid<double>& v, Grid<double>& out) {
-      evaluate(s, target, g, v, at.data(), threads);
-      std::fill(out.data.begin(), out.data.end(), 0.0);
-      splat(s, target, g, rows, at.data(), A, out, threads);
-      rep.passes += 2;
-      if (lambda > 0) {
-        R.apply(v, rc);
-        for (std::size_t e = 0; e < out.data.size(); ++e) out.data[e] += lambda * rc.data[e];
-      }
-    };
-    const SpectralPreconditioner pre(g.nx, g.ny, target.boundary, a, area, R, lambda);
-    ScatteredReport r;
-    conjugate_gradients(x, b, apply, pre, cg, r);
-    rep.iterations += r.iterations;
-    rep.residual = r.residual;
+  auto evaluate_at = [&](const Grid<double>& v, double* out) {
+    evaluate(s, target, g, v, out, threads);
   };
-  Grid<double> x(g.nx, g.ny, A), best;
+  auto splat_at = [&](const double* v, Grid<double>& out) {
+    splat(s, target, g, rows, v, A, out, threads);
+  };
+  auto apply_R = [&](const Grid<double>& v, Grid<double>& out) { R.apply(v, out); };
+  auto make_pre = [&](double lambda) {
+    return std::make_unique<SpectralPreconditioner>(g.nx, g.ny, target.boundary, a, area, R, lambda);
+  };
   double best_lambda = 0;
-  if (!gcv) {
-    best_lambda = *options.lambda;
-    solve(best_lambda, x);
-    best = std::move(x);
-  } else {
-    const double h = std::max(g.hx, g.hy), unit = std::pow(h, 2 * options.smoothness);
-    // From the largest lambda down, each solve starting from the previous
-    // one's solution; the search stops once the score has risen at two
-    // successive lambdas below the best (the small lambdas are the costly
-    // solves, and the score rises towards interpolation).
-    double best_score = 0;
-    int rises = 0;
-    for (int k = 14; k >= 0 && rises < 2; --k) {
-      const double lambda = unit * std::pow(10.0, -6 + 0.5 * k);
-      solve(lambda, x);
-      evaluate(s, target, g, x, at.data(), threads);
-      rep.passes += 1;
-      double rss = 0, trace = 0;
-      for (long i = 0; i < N; ++i) {
-        const double w = s.weights[i] * double(N) / wsum;
-        for (int c = 0; c < C; ++c) {
-          const double r = s.values[std::size_t(i) * A + c] - at[std::size_t(i) * A + c];
-          rss += w * r * r;
-        }
-        for (int p = 0; p < P; ++p)
-          trace += rademacher(p, i) * std::sqrt(s.weights[i]) * at[std::size_t(i) * A + C + p];
-      }
-      trace /= P;
-      const double dof = std::max(double(N) - trace, 1e-300);
-      const double score = double(N) * rss / C / (dof * dof);
-      rep.gcv.push_back({lambda, score});
-      if (k == 14 || score < best_score) {
-        best_score = score;
-        best_lambda = lambda;
-        best = x;
-        rises = 0;
-      } else {
-        ++rises;
-      }
-    }
-  }
+  const double h = std::max(g.hx, g.hy), unit = std::pow(h, 2 * options.smoothness);
+  const Grid<double> best = variational_search(N, C, P, s.weights, s.values, b, at, evaluate_at,
+                                               splat_at, apply_R, make_pre, unit, options, rep,
+                                               best_lambda);
   Grid<double> c(g.nx, g.ny, C, kUnset);
   for (std::size_t e = 0; e < c.data.size() / C; ++e)
     for (int ch = 0; ch < C; ++ch) c.data[e * C + ch] = best.data[e * A + ch];

@@ -153,10 +153,11 @@ Resolved resolve(const Settings& o) {
     throw RequestError("--smoothness " + std::to_string(o.smoothness) +
                        ": expected 1 (gradient) or 2 (thin plate)");
   r.scattered.smoothness = o.smoothness;
-  if (r.scattered.rule == ScatteredRule::Variational &&
-      std::holds_alternative<HexagonalSpace>(r.space))
-    throw RequestError("--rule variational: needs --lattice cartesian (the smoothness functional "
-                       "is built for the Cartesian B-spline space), not --lattice hex");
+  if (r.scattered.rule == ScatteredRule::Variational && r.scattered.smoothness == 2)
+    if (const auto* hex = std::get_if<HexagonalSpace>(&r.space); hex && hex->order < 2)
+      throw RequestError("--rule variational --smoothness 2 (the thin plate, the default) needs "
+                         "square-integrable second derivatives, which --generator hex-hat (C0) "
+                         "does not have: use --smoothness 1 or --generator hex-quartic");
   // the conventional methods take the normalised average
   if (r.method == Method::Conventional && !o.rule_given) r.scattered.rule = ScatteredRule::NormalisedSum;
   if (o.iterations < 0)

@@ -81,7 +81,8 @@ def test_order_one_equals_a_dense_solve():
     ({"lambda_": "big"}, "lambda_"),
     ({"lambda_": True}, "lambda_"),
     ({"smoothness": 3}, "--smoothness 3"),
-    ({"lattice": "hex", "generator": "hex-quartic"}, "--lattice cartesian"),
+    ({"lattice": "hex", "generator": "hex-hat"}, "hex-hat"),
+    ({"lattice": "hex", "generator": "hex-hat", "smoothness": 2}, "--smoothness 2"),
 ])
 def test_bad_keywords_are_clear_errors(kw, needle):
     pos, values = samples(40, 9, 7, 1)
@@ -93,3 +94,19 @@ def test_lambda_needs_the_variational_rule():
     pos, values = samples(40, 9, 7, 1)
     with pytest.raises(ValueError, match="--rule variational"):
         siproject.project(values, positions=pos, size=(9, 7), rule="fit", lambda_=0.1)
+
+
+@pytest.mark.parametrize("generator, order", [("hex-quartic", 2), ("hex-quartic", 1),
+                                              ("hex-hat", 1)])
+def test_hexagonal_lattice_flat_image_is_exact(generator, order):
+    pos, _ = samples(60, 9, 7, 2)
+    values = np.full(len(pos), 0.42)
+    for lam in (0.01, 10.0, None):
+        kw = {} if lam is None else {"lambda_": lam}
+        k = siproject.coefficients(values, positions=pos, size=(9, 7), rule="variational",
+                                   lattice="hex", generator=generator, smoothness=order, **kw)
+        if lam is not None:
+            assert k.report["lambda"] == lam
+        img = siproject.project(values, positions=pos, size=(9, 7), rule="variational",
+                                lattice="hex", generator=generator, smoothness=order, **kw)
+        assert np.allclose(img, 0.42, atol=1e-6)

@@ -18,6 +18,10 @@ namespace sis {
 class HexPrefilterPlan {
  public:
   HexPrefilterPlan(int order, long columns, long rows);
+  // Division by any symmetric stencil's spectrum instead of a's:
+  // A(m1, m2) = sum_k taps[k] cos(...), which must be positive (the
+  // variational rule's preconditioner: |det L| a + lambda R).
+  HexPrefilterPlan(const std::vector<HexTap>& taps, long columns, long rows);
   ~HexPrefilterPlan();
   HexPrefilterPlan(const HexPrefilterPlan&) = delete;
   HexPrefilterPlan& operator=(const HexPrefilterPlan&) = delete;
@@ -31,6 +35,7 @@ class HexPrefilterPlan {
   void execute(Grid<double>& r, int threads = 1) const;
 
  private:
+  void init(const std::vector<HexTap>& taps);
   long Q_, R_, H_;  // H_ = Q/2 + 1 row spectrum entries
   std::vector<double> divisor_;
   void* r2c_ = nullptr;       // fftw_plan

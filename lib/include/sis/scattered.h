@@ -17,7 +17,11 @@
 //                  (sis/smoothness.h): (G + lambda R) c = b by conjugate
 //                  gradients preconditioned with the DCT/DFT diagonal of
 //                  hx hy a + lambda R, lambda given or by generalised
-//                  cross-validation (docs/design.md section 15); Cartesian only.
+//                  cross-validation (docs/design.md section 15). On the
+//                  hexagonal lattice: the fit's periodic grid and images,
+//                  R the box spline's stencil (HexSmoothnessOperator),
+//                  preconditioned with the twisted DFT's diagonal of
+//                  |det L| a + lambda R; order 2 refuses hex-hat.
 // PlainSum (r[n] = sum_i w_i f_i phi_i,n, then the prefilter) is the unbiased
 // but inexact estimate, kept for comparison. The conventional methods take
 // the normalised weighted average p[n] = sum_i w_i f_i K_i,n / sum_i w_i K_i,n.

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "sis/boundary.h"
+#include "sis/box_spline.h"
 #include "sis/image.h"
 
 namespace sis {
@@ -47,6 +48,51 @@ class SmoothnessOperator {
   int order_;
   Boundary boundary_;
   std::vector<Term> terms_;
+};
+
+// The functional on the hexagonal lattice (docs/design.md section 15), for
+// f(x) = sum_k c_k phi(x - x_k), phi(x) = M_n(L^{-1} x) the three-directional
+// box spline (sis/box_spline.h), L the lattice's matrix (output pixels):
+// J(f) = c^T R c with R the shift-invariant stencil
+//   R_d = int D phi(x) . D phi(x - x_d) dx
+// over lattice offsets d, D the gradient (order 1) or the Hessian with the
+// Frobenius product (order 2: f_xx^2 + 2 f_xy^2 + f_yy^2). With B = L^{-1}:
+// grad_x = B^T grad_u, Hessian_x = B^T H_u B, dx = |det L| du.
+//
+// How computed: on every triangle of the box spline's mesh both phi(u) and
+// phi(u - d) are polynomials (BoxSpline::piece, d an integer offset maps the
+// mesh to itself); their derivatives are differentiated analytically from
+// the pieces' coefficients and the products integrated over the triangle by
+// a Gauss-Legendre product rule in collapsed (Duffy) coordinates,
+// w1 = s, w2 = (1 - s) t, of 8 x 8 points: exact for the degree 6n - 6
+// (order 1) or 6n - 8 (order 2) products (degree + 1 in s after the
+// Jacobian 1 - s). So R is exact to rounding; it is then symmetrised
+// (R_d = R_-d) and R_0 set to minus the sum of the others, so that
+// constants have no energy to the last bit.
+//
+// The coefficients are those of the offset-row grid (sis/hex_lattice.h),
+// periodic on it (the hexagonal fit's model), so c^T R c is the functional
+// integrated over one period of the grid: the frame and its margin.
+// Order 2 needs phi in H^2: the hex-quartic (n = 2, C2); the hexagonal hat
+// (n = 1, C0) is refused for order 2 (its second derivatives are line
+// deltas on the mesh's edges).
+class HexSmoothnessOperator {
+ public:
+  // order 1 or 2; matrix: the lattice's (row-major, x = L u), as Lattice::matrix().
+  HexSmoothnessOperator(const BoxSpline& spline, int order, const std::array<double, 4>& matrix);
+  // out = R c, c periodic on its offset-row grid (rows even). Threads split
+  // the rows, each output summed in a fixed order: the same bits for any
+  // thread count.
+  void apply(const Grid<double>& c, Grid<double>& out, int threads = 1) const;
+  // J of the coefficients, per channel: c^T R c.
+  std::vector<double> energy(const Grid<double>& c) const;
+  // The stencil R_d, d over the hexagon of radius 2n - 1 (nonzero taps).
+  const std::vector<HexTap>& taps() const { return taps_; }
+  int order() const { return order_; }
+
+ private:
+  int order_;
+  std::vector<HexTap> taps_;
 };
 
 // A symmetric tap vector's transform at angular frequency w:
