@@ -44,8 +44,9 @@
 #                    in bands of at most MESH_RAYS rays, and write to
 #                    $(OUT)/SCENE-SAMPLES-sSEED/
 #   SEED=0           the pattern's seed (jitter, sobol)
-#   RULE=auto        jitter, sobol, adaptive: how me-cubic and me-cubic-2x2
-#                    fit the scattered rays (siproject --rule): fit,
+#   RULE=auto        jitter, sobol, adaptive: how me-cubic, me-cubic-2x2,
+#                    hex-quartic and hex-hat (first order) fit the
+#                    scattered rays (siproject --rule): fit,
 #                    variational (the smoothing spline, lambda by GCV), or
 #                    auto: variational below 4 rays per pixel (FACTOR^2, or
 #                    RAYS), fit from 4 (docs/studies.md "Adaptive rays");
@@ -254,7 +255,8 @@ endif
 # below 4 rays per pixel, where it is the closer one).
 RULE_RAYS := $(if $(ADAPTIVE),$(RAYS),$(shell awk 'BEGIN { print $(FACTOR) * $(FACTOR) }'))
 SCATTERED_RULE := $(if $(filter auto,$(RULE)),$(shell awk 'BEGIN { print ($(RULE_RAYS) < 4) ? "variational" : "fit" }'),$(RULE))
-rule_opts_of = $(if $(SAMPLES_TAG),$(if $(filter me-cubic me-cubic-2x2,$(1)),$(if $(filter variational,$(SCATTERED_RULE)),--rule variational)))
+# hex-hat (C0) takes the first-order functional, the others the thin plate.
+rule_opts_of = $(if $(SAMPLES_TAG),$(if $(filter me-cubic me-cubic-2x2 hex-quartic hex-hat,$(1)),$(if $(filter variational,$(SCATTERED_RULE)),--rule variational$(if $(filter hex-hat,$(1)), --smoothness 1))))
 ifneq ($(shell echo '$(SEED)' | grep -Ex '[0-9]+'),$(SEED))
 $(error SEED=$(SEED): expected a whole number >= 0)
 endif

@@ -80,9 +80,12 @@ if mk SAMPLES=sobol FACTOR=1 >"$tmp/log" 2>&1; then
   if oiiotool "$u/me-cubic.exr" "$tmp/v.exr" --fail 0 --warn 0 --diff >"$tmp/diff" 2>&1 &&
      ! oiiotool "$u/me-cubic.exr" "$tmp/f.exr" --fail 0 --warn 0 --diff >/dev/null 2>&1 &&
      grep -q -- "--rule variational" "$u/.me-cubic.cmd" && ! grep -q -- "--rule" "$u/.conv-tent.cmd" &&
+     mk -n SAMPLES=sobol FACTOR=1 METHODS="hex-hat hex-quartic" >"$tmp/plan" 2>&1 &&
+     grep -q -- "--generator hex-hat --display centred --rule variational --smoothness 1" "$tmp/plan" &&
+     grep -q -- "--generator hex-quartic --display centred --rule variational" "$tmp/plan" &&
      mk SAMPLES=sobol FACTOR=1 RULE=fit >"$tmp/log" 2>&1 &&
      oiiotool "$u/me-cubic.exr" "$tmp/f.exr" --fail 0 --warn 0 --diff >"$tmp/diff" 2>&1; then
-    ok "RULE=auto at 1 ray per pixel: me-cubic by the variational rule (siproject's bits), conv-tent as before; RULE=fit: the fit"
+    ok "RULE=auto at 1 ray per pixel: me-cubic by the variational rule (siproject's bits), hex-quartic too, hex-hat of order 1, conv-tent as before; RULE=fit: the fit"
   else
     cat "$tmp/log" "$tmp/diff" >&2; fail "RULE: me-cubic at 1 ray per pixel is not the rule's result"
   fi
