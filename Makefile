@@ -976,5 +976,7 @@ compare-adaptive: $(if $(PREBUILT),,build)
 	  --ref-factor $(AD_REF_FACTOR) --seed 0 --sirays $(SIRAYS) --siproject $(SIPROJECT) \
 	  --zp-nyquist $(ZP_NYQUIST)
 	@set -e; for s in $(AD_RECT_SCENES); do \
+	  case " $(AD_SCENES) " in *" $$s "*) ;; *) echo "compare-adaptive: AD_RECT_SCENES: $$s is not in AD_SCENES ($(AD_SCENES)): it has no refinement" >&2; exit 2;; esac; \
 	  $(PYTHON) scripts/rect_pass.py --refinement $(AD_WORK)/render/$$s-$(AD_RES)-adaptive-r16-s0.refine.txt \
-	    --scene $(SCENEDIR)/$$s.pov --out $(OUT)/report$(if $(QUICK),-quick)/adaptive/rectangles-$$s.md; done
+	    --scene $(SCENEDIR)/$$s.pov --povopts "$$([ $$s = zoneplate ] && awk 'BEGIN { printf "Declare=ZP_K=%.6f", $(ZP_NYQUIST) * atan2(0, -1) * $(AD_RES) }')" \
+	    --out $(OUT)/report$(if $(QUICK),-quick)/adaptive/rectangles-$$s.md; done

@@ -248,6 +248,8 @@ def allocate(est, have, budget, P, tile_pixels):
     def counts(c):
         return np.clip(np.floor(np.maximum(have, c * want)), have, FINE).astype(np.int64)
     allowed = math.floor(budget * P + 1e-6)
+    if (have * p).sum() > allowed:
+        raise ValueError(f"allocate(): the rays already traced exceed the budget of {budget} a pixel")
     lo, hi = 0.0, 1.0
     while (counts(hi) * p).sum() <= allowed and hi < 1e30 and (counts(hi) < FINE).any():
         hi *= 2

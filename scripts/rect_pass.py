@@ -74,6 +74,10 @@ def main():
     a = p.parse_args()
     W, H, T, R, tiles = read_refinement(a.refinement)
     s = max(1, round(R ** 0.5))
+    if T * s < 2:
+        # +EC1/+ER1 would be read as the fraction 1.0 (the whole frame)
+        sys.exit(f"rect_pass.py: {a.refinement}: tiles of {T} pixels at {s} x {s} rays make "
+                 "rectangles of one column, which POV-Ray cannot name")
     lines = [f"Rectangular partial renders of {len(tiles)} refined tiles of {T} x {T} pixels "
              f"({os.path.basename(a.refinement)}, {W} x {H}, {R} rays per refined pixel): "
              f"a regular {s} x {s} grid a pixel ({s * s} rays), the frame at {W * s} x {H * s}.", "",

@@ -171,5 +171,6 @@ TEST_F(FactorCli, VariationalWorkingSetIsCountedBeforeItIsAllocated) {
   EXPECT_EQ(v.status, 2) << v.output;
   EXPECT_NE(v.output.find("the request needs about"), std::string::npos) << v.output;
   EXPECT_NE(v.output.find("4000000 scattered samples"), std::string::npos) << v.output;
+  EXPECT_NE(v.output.find("give --lambda"), std::string::npos) << v.output;
   EXPECT_FALSE(std::filesystem::exists(path("o.exr")));
 }

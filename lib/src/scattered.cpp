@@ -963,9 +963,9 @@ std::uint64_t variational_bytes(std::uint64_t n, long N, int C, int P) {
 // in the grid's period: per image its owner, weight, values and f_app
 // (2 + 2A); b, the CG's r, z, p, q, R v, x and the best x (8A a
 // coefficient); the preconditioner's spectrum and divisors (about 2).
-std::uint64_t variational_bytes_hex(std::uint64_t n, long M, int C, int P) {
+std::uint64_t variational_bytes_hex(std::uint64_t n, long M, long N, int C, int P) {
   const std::uint64_t A = std::uint64_t(C + P);
-  return 8 * (n * (8 * A + 2) + std::uint64_t(M) * (2 + 2 * A));
+  return 8 * (n * (8 * A + 2) + std::uint64_t(M) * (2 + 2 * A) + std::uint64_t(N) * (1 + 2 * A));
 }
 
 }  // namespace
@@ -989,7 +989,7 @@ std::uint64_t scattered_bytes(const ScatteredTarget& target, const ScatteredSamp
   if (options.rule == ScatteredRule::Variational) {
     const detail::HexScatteredGrid g = detail::hex_scattered_grid(target);
     const long images = detail::hex_image_count(g, samples, detail::HexImages::Period);
-    return variational_bytes_hex(std::uint64_t(nx) * std::uint64_t(ny), images, C,
+    return variational_bytes_hex(std::uint64_t(nx) * std::uint64_t(ny), images, samples.count(), C,
                                  options.lambda ? 0 : options.gcv_probes);
   }
   const std::uint64_t grid = std::uint64_t(nx) * std::uint64_t(ny) * C;
@@ -1181,16 +1181,22 @@ double rademacher(int p, long i) {
 // probes z_i / sqrt(w_i)); evaluate_at(v, at) puts f_app of coefficients v
 // at the points in at (A values each), splat_at(at, out) adds
 // sum_i w_i at_i phi_i to out; apply_R(v, out) out = R v; make_pre(lambda)
-// the preconditioner (a pointer to a callable (in, out)). Returns the best
-// solution, all A channels; best_lambda the lambda it belongs to.
-template <typename Evaluate, typename Splat, typename ApplyR, typename MakePre>
-Grid<double> variational_search(long N, int C, int P, const std::vector<double>& weights,
-                                const std::vector<double>& values, const Grid<double>& b,
-                                std::vector<double>& at, const Evaluate& evaluate_at,
-                                const Splat& splat_at, const ApplyR& apply_R,
-                                const MakePre& make_pre, double unit,
-                                const ScatteredOptions& options, ScatteredReport& rep,
-                                double& best_lambda) {
+// the preconditioner (a pointer to a callable (in, out)). GCV scores at the
+// samples themselves: Ns samples of weights sw and values sv (C a sample),
+// f_app of the A channels at them by evaluate_score(v, sat); a sample's
+// probe values are those of every point it stands for (on the hexagonal
+// lattice its images), so the hat matrix is the samples'. Returns the best
+// solution, all A channels; best_lambda the lambda it belongs to, and the
+// report's residual its solve's.
+template <typename Evaluate, typename EvaluateScore, typename Splat, typename ApplyR,
+          typename MakePre>
+Grid<double> variational_search(int C, int P, const Grid<double>& b, std::vector<double>& at,
+                                const Evaluate& evaluate_at, const Splat& splat_at,
+                                const ApplyR& apply_R, const MakePre& make_pre, long Ns,
+                                const std::vector<double>& sw, const std::vector<double>& sv,
+                                std::vector<double>& sat, const EvaluateScore& evaluate_score,
+                                double unit, const ScatteredOptions& options,
+                                ScatteredReport& rep, double& best_lambda) {
   const int A = C + P;
   const bool gcv = P > 0;
   const long nx = b.width, ny = b.height;
@@ -1198,7 +1204,7 @@ Grid<double> variational_search(long N, int C, int P, const std::vector<double>&
   cg.iterations = options.variational_iterations;
   cg.tolerance = options.variational_tolerance;
   double wsum = 0;
-  for (long i = 0; i < N; ++i) wsum += weights[i];
+  for (long i = 0; i < Ns; ++i) wsum += sw[i];
   // x is the starting point (zero, or the previous lambda's solution).
   auto solve = [&](double lambda, Grid<double>& x) {
     Grid<double> rc(nx, ny, A);
@@ -1219,6 +1225,7 @@ Grid<double> variational_search(long N, int C, int P, const std::vector<double>&
     rep.residual = r.residual;
   };
   Grid<double> x(nx, ny, A), best;
+  std::vector<double> best_residual;
   best_lambda = 0;
   if (!gcv) {
     best_lambda = *options.lambda;
@@ -1234,31 +1241,33 @@ Grid<double> variational_search(long N, int C, int P, const std::vector<double>&
     for (int k = 14; k >= 0 && rises < 2; --k) {
       const double lambda = unit * std::pow(10.0, -6 + 0.5 * k);
       solve(lambda, x);
-      evaluate_at(x, at.data());
+      evaluate_score(x, sat.data());
       rep.passes += 1;
       double rss = 0, trace = 0;
-      for (long i = 0; i < N; ++i) {
-        const double w = weights[i] * double(N) / wsum;
+      for (long i = 0; i < Ns; ++i) {
+        const double w = sw[i] * double(Ns) / wsum;
         for (int c = 0; c < C; ++c) {
-          const double r = values[std::size_t(i) * A + c] - at[std::size_t(i) * A + c];
+          const double r = sv[std::size_t(i) * C + c] - sat[std::size_t(i) * A + c];
           rss += w * r * r;
         }
         for (int p = 0; p < P; ++p)
-          trace += rademacher(p, i) * std::sqrt(weights[i]) * at[std::size_t(i) * A + C + p];
+          trace += rademacher(p, i) * std::sqrt(sw[i]) * sat[std::size_t(i) * A + C + p];
       }
       trace /= P;
-      const double dof = std::max(double(N) - trace, 1e-300);
-      const double score = double(N) * rss / C / (dof * dof);
+      const double dof = std::max(double(Ns) - trace, 1e-300);
+      const double score = double(Ns) * rss / C / (dof * dof);
       rep.gcv.push_back({lambda, score});
       if (k == 14 || score < best_score) {
         best_score = score;
         best_lambda = lambda;
         best = x;
+        best_residual = rep.residual;
         rises = 0;
       } else {
         ++rises;
       }
     }
+    rep.residual = best_residual;
   }
   return best;
 }
@@ -1293,8 +1302,16 @@ Coefficients project_variational_hex(const ScatteredSamples& samples, const Scat
     const long i = owner[m];
     weights[m] = samples.weights.empty() ? w0 : samples.weights[i];
     for (int c = 0; c < C; ++c) values[std::size_t(m) * A + c] = samples.values[std::size_t(i) * C + c];
-    for (int p = 0; p < P; ++p) values[std::size_t(m) * A + C + p] = rademacher(p, m) / std::sqrt(weights[m]);
+    // a sample's probe value, the same at each of its images
+    for (int p = 0; p < P; ++p) values[std::size_t(m) * A + C + p] = rademacher(p, i) / std::sqrt(weights[m]);
   }
+  // GCV scores at the samples themselves (their images repeat their values)
+  std::vector<double> sample_weights(std::size_t(N), w0);
+  if (!samples.weights.empty()) sample_weights = samples.weights;
+  std::vector<double> at_samples(gcv ? std::size_t(N) * A : 0);
+  auto evaluate_samples = [&](const Grid<double>& v, double* out) {
+    detail::hex_evaluate_images(g, samples, v, detail::HexImages::Sample, out, threads);
+  };
   ScatteredReport rep;
   Grid<double> b(nx, ny, A);
   detail::hex_splat(g, samples, values.data(), A, true, detail::HexImages::Period, b, threads);
@@ -1326,14 +1343,15 @@ Coefficients project_variational_hex(const ScatteredSamples& samples, const Scat
   };
   double best_lambda = 0;
   const double unit = std::pow(g.layout.step(), 2 * options.smoothness);
-  const Grid<double> best = variational_search(M, C, P, weights, values, b, at, evaluate_at, splat_at,
-                                               apply_R, make_pre, unit, options, rep, best_lambda);
+  const Grid<double> best = variational_search(C, P, b, at, evaluate_at, splat_at, apply_R, make_pre, N,
+                                               sample_weights, samples.values, at_samples,
+                                               evaluate_samples, unit, options, rep, best_lambda);
   Grid<double> c(nx, ny, C, kUnset);
   for (std::size_t e = 0; e < c.data.size() / C; ++e)
     for (int ch = 0; ch < C; ++ch) c.data[e * C + ch] = best.data[e * A + ch];
   rep.lambda = best_lambda;
   rep.residual.resize(C);
-  rep.bytes = variational_bytes_hex(std::uint64_t(nx) * std::uint64_t(ny), M, C, P);
+  rep.bytes = variational_bytes_hex(std::uint64_t(nx) * std::uint64_t(ny), M, N, C, P);
   if (report) *report = rep;
   return detail::hex_scattered_coefficients(g, std::move(c));
 }
@@ -1423,9 +1441,9 @@ Coefficients project_variational(const ScatteredSamples& samples, const Scattere
   };
   double best_lambda = 0;
   const double h = std::max(g.hx, g.hy), unit = std::pow(h, 2 * options.smoothness);
-  const Grid<double> best = variational_search(N, C, P, s.weights, s.values, b, at, evaluate_at,
-                                               splat_at, apply_R, make_pre, unit, options, rep,
-                                               best_lambda);
+  const Grid<double> best = variational_search(C, P, b, at, evaluate_at, splat_at, apply_R, make_pre, N,
+                                               s.weights, samples.values, at, evaluate_at, unit,
+                                               options, rep, best_lambda);
   Grid<double> c(g.nx, g.ny, C, kUnset);
   for (std::size_t e = 0; e < c.data.size() / C; ++e)
     for (int ch = 0; ch < C; ++ch) c.data[e * C + ch] = best.data[e * A + ch];

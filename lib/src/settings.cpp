@@ -522,9 +522,17 @@ Formed form_scattered(const Settings& o, const Resolved& r, ScatteredInput in, c
                                        std::uint64_t(extent.first) * std::uint64_t(extent.second),
                                        false, fr.coefficient_file, threads) +
                       working;
-  check_memory(f.estimated_bytes, "the projection of " + std::to_string(n) + " scattered samples to " +
-                                      std::to_string(f.width) + " x " + std::to_string(f.height) +
-                                      " x " + std::to_string(C));
+  try {
+    check_memory(f.estimated_bytes, "the projection of " + std::to_string(n) + " scattered samples to " +
+                                        std::to_string(f.width) + " x " + std::to_string(f.height) +
+                                        " x " + std::to_string(C));
+  } catch (const RequestError& e) {
+    // the samples, not the output, fill the variational rule's memory
+    if (r.scattered.rule != ScatteredRule::Variational) throw;
+    throw RequestError(std::string(e.what()) +
+                       (r.scattered.lambda ? "" : ", or give --lambda (no GCV probes: fewer channels)") +
+                       ", or --rule fit (its working set is a few grids)");
+  }
   check_scattered(in, target.width, target.height, r.zero_nonfinite, f.nonfinite);
   if (f.nonfinite.count)
     f.warnings.push_back("replaced " + std::to_string(f.nonfinite.count) +
