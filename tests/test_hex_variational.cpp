@@ -16,13 +16,19 @@
 #include "sis/hex_lattice.h"
 #include "sis/scattered.h"
 #include "sis/smoothness.h"
+#include "hex_scattered_reference.h"
 #include "scattered_samples.h"
 #include "support.h"
 
 namespace sis {
 namespace {
 
+using test::all_images;
 using test::dense_solve;
+using test::layout_of;
+using test::normal_equations;
+using test::order_of;
+using test::phi;
 using test::jittered;
 using test::random_samples;
 using test::uniform;
@@ -37,14 +43,6 @@ ScatteredTarget target(double W, double H, int order, Boundary b, int margin = -
   return t;
 }
 
-HexLayout layout_of(const ScatteredTarget& t) {
-  const auto& hex = std::get<HexagonalSpace>(t.space);
-  return hex_layout(hex.density, t.width, t.height,
-                    t.margin >= 0 ? t.margin : hex_default_margin(hex.order));
-}
-
-int order_of(const ScatteredTarget& t) { return std::get<HexagonalSpace>(t.space).order; }
-
 ScatteredOptions variational(std::optional<double> lambda, int smoothness = 2) {
   ScatteredOptions o;
   o.rule = ScatteredRule::Variational;
@@ -53,13 +51,6 @@ ScatteredOptions variational(std::optional<double> lambda, int smoothness = 2) {
   o.variational_iterations = 3000;
   o.variational_tolerance = 1e-14;
   return o;
-}
-
-// phi(x - p) in output pixels.
-double phi(const BoxSpline& B, const HexLayout& L, double x, double y, Vec2 p) {
-  const double h = L.step(), hy = L.row_step();
-  const double u2 = (y - p.y) / hy, u1 = (x - p.x) / h - 0.5 * u2;
-  return B.eval(u1, u2);
 }
 
 struct Generator {
@@ -202,57 +193,6 @@ TEST(HexSmoothness, TheThinPlateRefusesTheHat) {
   test::expect_error([&] { project_scattered(s, target(6, 5, 1, Boundary::Mirror), variational(0.1)); },
                      "hex-hat");
   EXPECT_NO_THROW(project_scattered(s, target(6, 5, 1, Boundary::Mirror), variational(0.1, 1)));
-}
-
-// Every image of coordinate x of a frame of extent E (far beyond the grid).
-std::vector<double> all_images(double x, double E, Boundary b) {
-  std::vector<double> v;
-  for (int k = -40; k <= 40; ++k) {
-    if (b == Boundary::Mirror) {
-      v.push_back(x + 2 * E * k);
-      v.push_back(-x + 2 * E * k);
-    } else {
-      v.push_back(x + E * k);
-    }
-  }
-  return v;
-}
-
-// The hexagonal fit's normal equations (as tests/test_hex_scattered.cpp):
-// the images inside one period of the grid, each weighing its sample's
-// weight, against phi of every lattice point wrapped on the grid.
-void normal_equations(const ScatteredSamples& s, const ScatteredTarget& t,
-                      std::vector<std::vector<double>>& G, std::vector<double>& b) {
-  const HexLayout L = layout_of(t);
-  const BoxSpline& B = BoxSpline::hexagonal(order_of(t));
-  const long Q = L.columns, R = L.rows, n = Q * R;
-  const double h = L.step(), hy = L.row_step();
-  const Vec2 o = L.lattice.origin();
-  const double x0 = o.x - h / 4, y0 = o.y - hy / 2;
-  G.assign(n, std::vector<double>(n, 0.0));
-  b.assign(n, 0.0);
-  std::vector<double> row(n);
-  for (long i = 0; i < s.count(); ++i) {
-    const double w = s.weights.empty() ? t.width * t.height / s.count() : s.weights[i];
-    for (double y : all_images(s.positions[2 * i + 1], t.height, t.boundary)) {
-      if (y < y0 || y >= y0 + R * hy) continue;
-      for (double x : all_images(s.positions[2 * i], t.width, t.boundary)) {
-        if (x < x0 || x >= x0 + Q * h) continue;
-        std::fill(row.begin(), row.end(), 0.0);
-        for (long j = -R; j < 2 * R; ++j)
-          for (long c = -Q; c < 2 * Q; ++c) {
-            const Vec2 p = L.position(c, j);
-            if (std::abs(p.x - x) > 2.1 * h || std::abs(p.y - y) > 2.1 * hy) continue;
-            row[L.wrap_row(j) * Q + L.wrap_column(c)] += phi(B, L, x, y, p);
-          }
-        for (long a = 0; a < n; ++a) {
-          if (row[a] == 0) continue;
-          b[a] += w * s.values[i] * row[a];
-          for (long m = 0; m < n; ++m) G[a][m] += w * row[a] * row[m];
-        }
-      }
-    }
-  }
 }
 
 TEST(HexVariational, EqualsDenseSolve) {
