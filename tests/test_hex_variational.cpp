@@ -325,25 +325,7 @@ TEST(HexVariational, ConvergesToTheHexLeastSquaresFitAsLambdaFalls) {
 
 TEST(HexVariational, SameBitsForAnyThreadCount) {
   const ScatteredTarget t = target(30, 24, 2, Boundary::Mirror);
-  const ScatteredSamples s = random_samples(700, 3, 30, 24, 11);
-  for (std::optional<double> lambda : {std::optional<double>(0.3), std::optional<double>()}) {
-    ScatteredOptions o = variational(lambda);
-    o.variational_iterations = 40;
-    o.variational_tolerance = 0;
-    ScatteredReport r1;
-    o.threads = 1;
-    const Coefficients a = project_scattered(s, t, o, &r1);
-    for (int threads : {2, 3}) {
-      o.threads = threads;
-      ScatteredReport rn;
-      const Coefficients b = project_scattered(s, t, o, &rn);
-      ASSERT_EQ(a.c.data.size(), b.c.data.size());
-      for (std::size_t e = 0; e < a.c.data.size(); ++e)
-        ASSERT_EQ(a.c.data[e], b.c.data[e]) << threads << " threads, element " << e;
-      EXPECT_EQ(r1.lambda, rn.lambda);
-      EXPECT_EQ(r1.gcv, rn.gcv);
-    }
-  }
+  test::expect_variational_same_bits_for_any_thread_count(random_samples(700, 3, 30, 24, 11), t, 40);
 }
 
 TEST(HexVariational, GcvPicksALargerLambdaForNoisierSamples) {

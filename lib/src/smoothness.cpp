@@ -62,6 +62,13 @@ SmoothnessOperator::SmoothnessOperator(int degree, int order, double hx, double 
 }
 
 namespace {
+// Per channel, sum over the grid of c times R c: the energy c^T R c.
+std::vector<double> quadratic_form(const Grid<double>& c, const Grid<double>& rc) {
+  std::vector<double> e(c.channels, 0.0);
+  for (std::size_t i = 0; i < c.data.size(); ++i) e[i % c.channels] += c.data[i] * rc.data[i];
+  return e;
+}
+
 long fold(long i, long n, Boundary b) {
   if (b == Boundary::Periodic) {
     i %= n;
@@ -105,9 +112,7 @@ void SmoothnessOperator::apply(const Grid<double>& c, Grid<double>& out) const {
 std::vector<double> SmoothnessOperator::energy(const Grid<double>& c) const {
   Grid<double> r(c.width, c.height, c.channels);
   apply(c, r);
-  std::vector<double> e(c.channels, 0.0);
-  for (std::size_t i = 0; i < c.data.size(); ++i) e[i % c.channels] += c.data[i] * r.data[i];
-  return e;
+  return quadratic_form(c, r);
 }
 
 double SmoothnessOperator::spectrum(double wx, double wy) const {
@@ -271,9 +276,7 @@ void HexSmoothnessOperator::apply(const Grid<double>& c, Grid<double>& out, int 
 std::vector<double> HexSmoothnessOperator::energy(const Grid<double>& c) const {
   Grid<double> r(c.width, c.height, c.channels);
   apply(c, r);
-  std::vector<double> e(c.channels, 0.0);
-  for (std::size_t i = 0; i < c.data.size(); ++i) e[i % c.channels] += c.data[i] * r.data[i];
-  return e;
+  return quadratic_form(c, r);
 }
 
 }  // namespace sis
